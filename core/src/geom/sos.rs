@@ -1,1 +1,305 @@
-//! placeholder
+//! Simulation of Simplicity (Edelsbrunner & Mücke 1990): a fixed symbolic perturbation
+//! that makes every predicate non-zero, so that construction and walking see one
+//! consistent scene in general position (DESIGN.md §2).
+//!
+//! **The perturbation.** Every point carries a *rank*: the query point (viewpoint, virtual
+//! viewpoint, ray origin) has rank 0, the scene vertex with global index `i` (its index in
+//! [`crate::SceneRef::vertices`]) has rank `i + 1`. A point of rank `r` is moved to
+//! `(x + ε^(2^(2r)), y + ε^(2^(2r+1)))` for an infinitesimal `ε > 0`. Direction vectors
+//! given by the caller are constants and are not perturbed.
+//!
+//! Every predicate here is the sign of a polynomial of degree ≤ 2 in the coordinates that is
+//! multilinear in the perturbation variables (a cross or dot product of differences), so
+//! its perturbed value is `F + Σ ∂F/∂εᵥ·εᵥ + Σ ∂²F/∂εᵤ∂εᵥ·εᵤεᵥ`. Monomials are ordered by
+//! their exponent `Σ 2^k`, i.e. by the binary number whose bits are the variables: the sign
+//! is that of the first non-zero coefficient in that order. First derivatives are
+//! coordinate differences, second derivatives are −1, 0 or 1, so the fallback costs a few
+//! subtractions and runs only when the exact value is zero.
+//!
+//! Because rank 0 dominates, a predicate involving the query point `q` is decided as if
+//! `q` were moved to `q + (ε, ε²)`: a viewpoint on a bitangent or on an edge's extension
+//! is pushed off it consistently in every predicate.
+//!
+//! Consistency: the perturbed signs are the signs of a real configuration (the scene at a
+//! small enough ε), so they are antisymmetric, transitive and agree with the exact sign
+//! whenever that is non-zero. `Zero` is returned only when a polynomial vanishes
+//! identically: two arguments that are the same point in a way that makes the expression
+//! zero (e.g. `orient(p, p, r)`), or constant-only input such as two equal directions.
+
+use core::cmp::Ordering;
+
+use super::predicates::{self, upper_half, Direction};
+use super::{Point, QueryPoint, Sign};
+
+/// A scene vertex with its perturbation rank (global vertex index + 1).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct RankedPoint {
+    /// Position on the scene grid.
+    pub point: Point,
+    /// Perturbation rank: global vertex index + 1 (rank 0 is the query point).
+    pub rank: u32,
+}
+
+impl RankedPoint {
+    /// The vertex with global index `index` at `point`.
+    #[inline]
+    pub fn vertex(point: Point, index: usize) -> RankedPoint {
+        RankedPoint { point, rank: index as u32 + 1 }
+    }
+}
+
+/// A point of a perturbed predicate, on the query grid, with its rank (`None`: constant).
+#[derive(Clone, Copy, Debug)]
+struct Sym {
+    x: i128,
+    y: i128,
+    rank: Option<u32>,
+}
+
+impl Sym {
+    const ORIGIN: Sym = Sym { x: 0, y: 0, rank: None };
+
+    fn vertex(v: RankedPoint) -> Sym {
+        let q = v.point.to_query();
+        Sym { x: q.x() as i128, y: q.y() as i128, rank: Some(v.rank) }
+    }
+
+    fn query(q: QueryPoint) -> Sym {
+        Sym { x: q.x() as i128, y: q.y() as i128, rank: Some(0) }
+    }
+
+    fn constant(d: Direction) -> Sym {
+        Sym { x: d.x as i128, y: d.y as i128, rank: None }
+    }
+}
+
+/// A perturbed point of a predicate and its coefficients in the two vectors `u`, `v`.
+#[derive(Clone, Copy, Default)]
+struct Var {
+    rank: u32,
+    su: i128,
+    sv: i128,
+}
+
+/// Collects the distinct perturbed points of `u = a − b`, `v = c − d`, sorted by rank.
+fn vars(a: Sym, b: Sym, c: Sym, d: Sym) -> ([Var; 4], usize) {
+    let mut out = [Var::default(); 4];
+    let mut n = 0;
+    for (s, su, sv) in [(a, 1, 0), (b, -1, 0), (c, 0, 1), (d, 0, -1)] {
+        let Some(rank) = s.rank else { continue };
+        if let Some(v) = out[..n].iter_mut().find(|v| v.rank == rank) {
+            v.su += su;
+            v.sv += sv;
+        } else {
+            out[n] = Var { rank, su, sv };
+            n += 1;
+        }
+    }
+    out[..n].sort_unstable_by_key(|v| v.rank);
+    (out, n)
+}
+
+/// Perturbed sign of `cross(a − b, c − d)`.
+///
+/// Bit budget: coordinates on the query grid (≤ 2⁵², or constants ≤ 2⁵²), differences
+/// ≤ 2⁵³, products ≤ 2¹⁰⁶: exact in `i128`.
+fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
+    let (ux, uy) = (a.x - b.x, a.y - b.y);
+    let (vx, vy) = (c.x - d.x, c.y - d.y);
+    let exact = Sign::of_i128(ux * vy - uy * vx);
+    if exact != Sign::Zero {
+        return exact;
+    }
+    let (vars, n) = vars(a, b, c, d);
+    // Variable k is (point k / 2, axis k % 2), in significance order. Monomial order: the
+    // single variable k, then the pairs (j, k) for j < k (binary counting order).
+    let single = |k: usize| -> i128 {
+        let p = vars[k / 2];
+        if k % 2 == 0 {
+            p.su * vy - p.sv * uy // ∂F/∂εx
+        } else {
+            p.sv * ux - p.su * vx // ∂F/∂εy
+        }
+    };
+    let pair = |j: usize, k: usize| -> i128 {
+        // ∂²F/∂εx(P)∂εy(Q) = su_P·sv_Q − sv_P·su_Q; same-axis pairs vanish.
+        let (pj, pk) = (vars[j / 2], vars[k / 2]);
+        match (j % 2, k % 2) {
+            (0, 1) => pj.su * pk.sv - pj.sv * pk.su,
+            (1, 0) => pk.su * pj.sv - pk.sv * pj.su,
+            _ => 0,
+        }
+    };
+    for k in 0..2 * n {
+        let s = Sign::of_i128(single(k));
+        if s != Sign::Zero {
+            return s;
+        }
+        for j in 0..k {
+            let s = Sign::of_i128(pair(j, k));
+            if s != Sign::Zero {
+                return s;
+            }
+        }
+    }
+    Sign::Zero
+}
+
+/// Perturbed sign of `dot(w, a − b)` for a constant vector `w`.
+fn dot(w: Direction, a: Sym, b: Sym) -> Sign {
+    let exact = Sign::of_i128(w.x as i128 * (a.x - b.x) + w.y as i128 * (a.y - b.y));
+    if exact != Sign::Zero {
+        return exact;
+    }
+    let (vars, n) = vars(a, b, Sym::ORIGIN, Sym::ORIGIN);
+    for p in &vars[..n] {
+        for c in [p.su * w.x as i128, p.su * w.y as i128] {
+            let s = Sign::of_i128(c);
+            if s != Sign::Zero {
+                return s;
+            }
+        }
+    }
+    Sign::Zero
+}
+
+/// Perturbed [`predicates::orient`]: `Positive` if `r` is left of `p → q`.
+/// Never `Zero` unless two arguments have the same rank.
+#[inline]
+pub fn orient(p: RankedPoint, q: RankedPoint, r: RankedPoint) -> Sign {
+    match predicates::orient(p.point, q.point, r.point) {
+        Sign::Zero => cross(Sym::vertex(q), Sym::vertex(p), Sym::vertex(r), Sym::vertex(p)),
+        s => s,
+    }
+}
+
+/// Perturbed [`predicates::orient_query`]: side of the query point `q` w.r.t. `a → b`.
+/// Never `Zero` unless `a` and `b` have the same rank.
+pub fn orient_query(a: RankedPoint, b: RankedPoint, q: QueryPoint) -> Sign {
+    cross(Sym::vertex(b), Sym::vertex(a), Sym::query(q), Sym::vertex(a))
+}
+
+/// Side of the vertex `v` w.r.t. the line through `q` with direction `d`: sign of
+/// `cross(d, v − q)`, `Positive` if `v` is to the left. Never `Zero`.
+pub fn side_of_line(q: QueryPoint, d: Direction, v: RankedPoint) -> Sign {
+    cross(Sym::constant(d), Sym::ORIGIN, Sym::vertex(v), Sym::query(q))
+}
+
+/// Perturbed [`predicates::parallel_offset`] for two vertices: `Positive` if the line of
+/// direction `d` through `s` is left of the one through `r`. Never `Zero` for distinct ranks.
+pub fn parallel_offset(d: Direction, r: RankedPoint, s: RankedPoint) -> Sign {
+    cross(Sym::constant(d), Sym::ORIGIN, Sym::vertex(s), Sym::vertex(r))
+}
+
+/// Perturbed order along direction `d` of the query point `q` and the vertex `v`:
+/// `Positive` if `v` comes after `q`. Never `Zero`.
+pub fn along_query(d: Direction, q: QueryPoint, v: RankedPoint) -> Sign {
+    dot(d, Sym::vertex(v), Sym::query(q))
+}
+
+/// Perturbed order along direction `d` of two vertices: `Positive` if `r` comes after `p`.
+/// Never `Zero` for distinct ranks.
+pub fn along(d: Direction, p: RankedPoint, r: RankedPoint) -> Sign {
+    dot(d, Sym::vertex(r), Sym::vertex(p))
+}
+
+/// Perturbed [`predicates::object_ahead`]: the line through `q` with direction `d` crosses
+/// the counter-clockwise edge `a → b`; `Positive` if the object is ahead of `q`.
+/// Never `Zero` for distinct `a`, `b`.
+pub fn object_ahead(q: QueryPoint, d: Direction, a: RankedPoint, b: RankedPoint) -> Sign {
+    let crossing = cross(Sym::constant(d), Sym::ORIGIN, Sym::vertex(b), Sym::vertex(a));
+    orient_query(a, b, q).times(crossing)
+}
+
+/// Whether the perturbed vector `head − tail` lies in the upper half-plane `[0, π)`.
+fn upper(head: Sym, tail: Sym) -> bool {
+    match dot(Direction { x: 0, y: 1 }, head, tail) {
+        Sign::Zero => upper_half(head.x - tail.x, 0),
+        s => s == Sign::Positive,
+    }
+}
+
+fn direction_cmp_sym(p1: Sym, q1: Sym, p2: Sym, q2: Sym) -> Ordering {
+    let (h1, h2) = (upper(q1, p1), upper(q2, p2));
+    if h1 != h2 {
+        return if h1 { Ordering::Less } else { Ordering::Greater };
+    }
+    match cross(q1, p1, q2, p2) {
+        Sign::Positive => Ordering::Less,
+        Sign::Zero => Ordering::Equal,
+        Sign::Negative => Ordering::Greater,
+    }
+}
+
+/// Perturbed [`predicates::direction_cmp`]: order of the directions of `q1 − p1` and
+/// `q2 − p2` by angle in `[0, 2π)` from +x. `Equal` only for the same pair of points.
+pub fn direction_cmp(p1: RankedPoint, q1: RankedPoint, p2: RankedPoint, q2: RankedPoint) -> Ordering {
+    direction_cmp_sym(Sym::vertex(p1), Sym::vertex(q1), Sym::vertex(p2), Sym::vertex(q2))
+}
+
+/// Order of the directions from the query point `q` to the vertices `v1` and `v2`, by
+/// angle in `[0, 2π)` from +x: the order in which a ray sweeping counter-clockwise around
+/// `q` from +x meets them. `Equal` only if `v1` and `v2` have the same rank.
+pub fn direction_cmp_query(q: QueryPoint, v1: RankedPoint, v2: RankedPoint) -> Ordering {
+    let q = Sym::query(q);
+    direction_cmp_sym(q, Sym::vertex(v1), q, Sym::vertex(v2))
+}
+
+/// Order of the direction from `q` to `v` and the constant direction `d`, by angle in
+/// `[0, 2π)` from +x. Never `Equal`.
+pub fn direction_cmp_query_dir(q: QueryPoint, v: RankedPoint, d: Direction) -> Ordering {
+    direction_cmp_sym(Sym::query(q), Sym::vertex(v), Sym::ORIGIN, Sym::constant(d))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: i32, y: i32, index: usize) -> RankedPoint {
+        RankedPoint::vertex(Point::from_raw(x, y).unwrap(), index)
+    }
+
+    #[test]
+    fn collinear_triples_get_a_consistent_nonzero_sign() {
+        let (a, b, c) = (v(0, 0, 0), v(1, 1, 1), v(2, 2, 2));
+        let s = orient(a, b, c);
+        assert_ne!(s, Sign::Zero);
+        // Antisymmetry and cyclic invariance, as for a real triangle.
+        assert_eq!(orient(b, a, c), s.flip());
+        assert_eq!(orient(b, c, a), s);
+        assert_eq!(orient(c, a, b), s);
+        assert_eq!(orient(a, c, b), s.flip());
+    }
+
+    #[test]
+    fn coincident_ranks_are_zero() {
+        let a = v(3, 4, 7);
+        assert_eq!(orient(a, a, v(1, 1, 1)), Sign::Zero);
+    }
+
+    #[test]
+    fn query_on_a_line_is_pushed_by_eps() {
+        // q on the x-axis through two vertices; q moves to q + (ε, ε²): above the axis.
+        let (a, b) = (v(0, 0, 0), v(10, 0, 1));
+        let q = Point::from_raw(5, 0).unwrap().to_query();
+        assert_eq!(orient_query(a, b, q), Sign::Positive);
+        assert_eq!(orient_query(b, a, q), Sign::Negative);
+        // A vertical line: the x-perturbation decides.
+        let (c, d) = (v(0, 0, 0), v(0, 10, 1));
+        let q = Point::from_raw(0, 5).unwrap().to_query();
+        assert_eq!(orient_query(c, d, q), Sign::Negative); // q + ε is right of upward c→d
+    }
+
+    #[test]
+    fn directions_from_a_viewpoint_on_an_edge_extension_are_ordered() {
+        let q = Point::from_raw(-10, 0).unwrap().to_query();
+        let (a, b) = (v(0, 0, 0), v(5, 0, 1));
+        let o = direction_cmp_query(q, a, b);
+        assert_ne!(o, Ordering::Equal);
+        assert_eq!(direction_cmp_query(q, b, a), o.reverse());
+        // q + (ε, ε²) is just above the axis: the directions to a and b point slightly
+        // below +x, i.e. near 2π; the nearer vertex a is further below, so it comes first.
+        assert_eq!(o, Ordering::Less);
+        assert_eq!(direction_cmp_query_dir(q, a, Direction::new(1, 0).unwrap()), Ordering::Greater);
+    }
+}
