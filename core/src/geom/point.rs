@@ -111,7 +111,7 @@ fn coord_from_f64(v: f64) -> Result<(i32, bool), CoordinateError> {
     }
     let scaled = v * (1u64 << FRAC_BITS) as f64; // exact: a power-of-two scale
     let r = libm::round(scaled);
-    if !(r.abs() <= MAX_ABS_RAW as f64) {
+    if r.is_nan() || r.abs() > MAX_ABS_RAW as f64 {
         return Err(CoordinateError::OutOfRange);
     }
     Ok((r as i32, r != scaled))
@@ -152,7 +152,7 @@ impl QueryPoint {
                 return Err(CoordinateError::NotFinite);
             }
             let r = libm::round(v * (1u64 << QUERY_FRAC_BITS) as f64);
-            if !(r.abs() <= QUERY_MAX_ABS_RAW as f64) {
+            if r.is_nan() || r.abs() > QUERY_MAX_ABS_RAW as f64 {
                 return Err(CoordinateError::OutOfRange);
             }
             Ok(r as i64)

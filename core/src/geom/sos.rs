@@ -251,6 +251,69 @@ pub fn direction_cmp_query_dir(q: QueryPoint, v: RankedPoint, d: Direction) -> O
     direction_cmp_sym(Sym::query(q), Sym::vertex(v), Sym::ORIGIN, Sym::constant(d))
 }
 
+/// An angle θ on the circle of directions, as the perturbed direction of a vector: the
+/// direction of a pair of vertices (bitangents, edges), from the query point to a vertex
+/// (sweeps), or a constant direction (walls such as θ = 0). All comparisons are exact
+/// degree-2 predicates under the perturbation of this module.
+#[derive(Clone, Copy, Debug)]
+pub struct Angle {
+    head: Sym,
+    tail: Sym,
+}
+
+impl Angle {
+    /// θ = 0, the direction +x (the permanent wall of the line space).
+    pub const ZERO: Angle = Angle { head: Sym { x: 1, y: 0, rank: None }, tail: Sym::ORIGIN };
+
+    /// The direction of `to − from`.
+    pub fn of_pair(from: RankedPoint, to: RankedPoint) -> Angle {
+        Angle { head: Sym::vertex(to), tail: Sym::vertex(from) }
+    }
+
+    /// The direction from the query point `q` to the vertex `v`.
+    pub fn from_query(q: QueryPoint, v: RankedPoint) -> Angle {
+        Angle { head: Sym::vertex(v), tail: Sym::query(q) }
+    }
+
+    /// A constant direction.
+    pub fn constant(d: Direction) -> Angle {
+        Angle { head: Sym::constant(d), tail: Sym::ORIGIN }
+    }
+
+    /// The opposite direction, θ + π.
+    #[must_use]
+    pub fn reversed(self) -> Angle {
+        Angle { head: self.tail, tail: self.head }
+    }
+
+    /// Order on the circle by angle in `[0, 2π)` from +x.
+    pub fn cmp_angle(&self, other: &Angle) -> Ordering {
+        direction_cmp_sym(self.tail, self.head, other.tail, other.head)
+    }
+
+    /// Offset order of the lines of direction θ through the vertices `p` and `r`:
+    /// `Positive` if the line through `r` lies to the left of the line through `p`
+    /// (sign of `cross(d, r − p)`).
+    pub fn offset_cmp(&self, p: RankedPoint, r: RankedPoint) -> Sign {
+        cross(self.head, self.tail, Sym::vertex(r), Sym::vertex(p))
+    }
+
+    /// Offset order of the line of direction θ through the query point `q` and the one
+    /// through the vertex `r`: `Positive` if the line through `r` lies to the left.
+    pub fn offset_cmp_query(&self, q: QueryPoint, r: RankedPoint) -> Sign {
+        cross(self.head, self.tail, Sym::vertex(r), Sym::query(q))
+    }
+
+    /// Order of the vertices `p` and `r` along a line of direction θ: `Positive` if `r`
+    /// comes after `p` (sign of `dot(d, r − p)`). Exact only: for the perturbed order of
+    /// points *on one line* use [`object_ahead`]-style predicates.
+    pub fn along_exact(&self, p: RankedPoint, r: RankedPoint) -> Sign {
+        let (dx, dy) = (self.head.x - self.tail.x, self.head.y - self.tail.y);
+        let (a, b) = (Sym::vertex(p), Sym::vertex(r));
+        Sign::of_i128(dx * (b.x - a.x) + dy * (b.y - a.y))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

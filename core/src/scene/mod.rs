@@ -3,7 +3,7 @@
 //! A scene is only ever seen through a validated view, [`SceneRef`]: every object has at
 //! least three vertices in strictly convex counter-clockwise order, every coordinate is in
 //! range, and no two objects touch or overlap. Storage is either caller-provided with
-//! fixed capacity ([`FixedScene`], `no_std`) or growable ([`Scene`], feature `alloc`).
+//! fixed capacity ([`FixedScene`], `no_std`) or growable (`Scene`, feature `alloc`).
 //!
 //! Ids: object id = index of the object in the input; vertex id = index of the vertex in
 //! that object's input list, *as written*. Internally vertices are stored counter-clockwise;
