@@ -17,6 +17,9 @@
 extern crate alloc;
 
 pub mod geom;
+mod ids;
+pub mod line_space;
+pub mod partition;
 pub mod scene;
 
 pub use geom::{Point, QueryPoint, Sign};

@@ -4,7 +4,7 @@
 //!
 //! * [`scene_file`]: the JSON scene interchange format — parsing with errors that name
 //!   the object and vertex at fault, and writing a scene back with its extra fields.
-//! * [`generate`]: deterministic test scenes after the paper's Figs. 20–22 (grid of
+//! * [`generate`](mod@generate): deterministic test scenes after the paper's Figs. 20–22 (grid of
 //!   triangles, hall of mirrors, mixed materials).
 //!
 //! The binary (`src/main.rs`, one module per subcommand under `src/cmd/`) only parses

@@ -146,8 +146,14 @@ proptest! {
 /// the exact sign.
 #[test]
 fn exhaustive_small_grid_orientation() {
-    let pts: Vec<Point> = (0..16i32).map(|i| Point::from_raw(i % 4, i / 4).unwrap()).collect();
-    let r: Vec<RankedPoint> = pts.iter().enumerate().map(|(i, p)| ranked(*p, (i * 7) % 16)).collect();
+    let pts: Vec<Point> = (0..16i32)
+        .map(|i| Point::from_raw(i % 4, i / 4).unwrap())
+        .collect();
+    let r: Vec<RankedPoint> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| ranked(*p, (i * 7) % 16))
+        .collect();
     for i in 0..16 {
         for j in 0..16 {
             for k in 0..16 {
@@ -171,8 +177,14 @@ fn exhaustive_small_grid_orientation() {
 /// 4-subset of a 3×3 grid (many collinear triples).
 #[test]
 fn exhaustive_small_grid_chirotope_axioms() {
-    let pts: Vec<RankedPoint> =
-        (0..9i32).map(|i| ranked(Point::from_raw(i % 3, i / 3).unwrap(), ((i * 5) % 9) as usize)).collect();
+    let pts: Vec<RankedPoint> = (0..9i32)
+        .map(|i| {
+            ranked(
+                Point::from_raw(i % 3, i / 3).unwrap(),
+                ((i * 5) % 9) as usize,
+            )
+        })
+        .collect();
     let chi = |a: usize, b: usize, c: usize| sos::orient(pts[a], pts[b], pts[c]).to_i8();
     for a in 0..9 {
         for b in 0..9 {

@@ -79,7 +79,11 @@ pub fn direction_cmp(p1: Point, q1: Point, p2: Point, q2: Point) -> Ordering {
     let hu = upper_half(ux as i128, uy as i128);
     let hv = upper_half(vx as i128, vy as i128);
     if hu != hv {
-        return if hu { Ordering::Less } else { Ordering::Greater };
+        return if hu {
+            Ordering::Less
+        } else {
+            Ordering::Greater
+        };
     }
     0.cmp(&cross_i64(ux, uy, vx, vy))
 }
@@ -158,7 +162,16 @@ mod tests {
     #[test]
     fn direction_order_on_the_circle() {
         let o = p(0, 0);
-        let dirs = [p(1, 0), p(1, 1), p(0, 1), p(-1, 1), p(-1, 0), p(-1, -1), p(0, -1), p(1, -1)];
+        let dirs = [
+            p(1, 0),
+            p(1, 1),
+            p(0, 1),
+            p(-1, 1),
+            p(-1, 0),
+            p(-1, -1),
+            p(0, -1),
+            p(1, -1),
+        ];
         for (i, a) in dirs.iter().enumerate() {
             for (j, b) in dirs.iter().enumerate() {
                 assert_eq!(direction_cmp(o, *a, o, *b), i.cmp(&j), "{i} {j}");
@@ -176,7 +189,10 @@ mod tests {
         let q = QueryPoint::from_raw(-5 << 16, 1 << 15).unwrap();
         // Entering through the left edge: ahead; looking back: behind.
         assert_eq!(object_ahead(q, dx, left.0, left.1), Sign::Positive);
-        assert_eq!(object_ahead(q, Direction::new(-1, 0).unwrap(), left.0, left.1), Sign::Negative);
+        assert_eq!(
+            object_ahead(q, Direction::new(-1, 0).unwrap(), left.0, left.1),
+            Sign::Negative
+        );
         // Leaving through the right edge gives the same answer.
         assert_eq!(object_ahead(q, dx, right.0, right.1), Sign::Positive);
         // q beyond the square: behind, from either edge.

@@ -44,7 +44,10 @@ impl RankedPoint {
     /// The vertex with global index `index` at `point`.
     #[inline]
     pub fn vertex(point: Point, index: usize) -> RankedPoint {
-        RankedPoint { point, rank: index as u32 + 1 }
+        RankedPoint {
+            point,
+            rank: index as u32 + 1,
+        }
     }
 }
 
@@ -57,19 +60,35 @@ struct Sym {
 }
 
 impl Sym {
-    const ORIGIN: Sym = Sym { x: 0, y: 0, rank: None };
+    const ORIGIN: Sym = Sym {
+        x: 0,
+        y: 0,
+        rank: None,
+    };
 
     fn vertex(v: RankedPoint) -> Sym {
         let q = v.point.to_query();
-        Sym { x: q.x() as i128, y: q.y() as i128, rank: Some(v.rank) }
+        Sym {
+            x: q.x() as i128,
+            y: q.y() as i128,
+            rank: Some(v.rank),
+        }
     }
 
     fn query(q: QueryPoint) -> Sym {
-        Sym { x: q.x() as i128, y: q.y() as i128, rank: Some(0) }
+        Sym {
+            x: q.x() as i128,
+            y: q.y() as i128,
+            rank: Some(0),
+        }
     }
 
     fn constant(d: Direction) -> Sym {
-        Sym { x: d.x as i128, y: d.y as i128, rank: None }
+        Sym {
+            x: d.x as i128,
+            y: d.y as i128,
+            rank: None,
+        }
     }
 }
 
@@ -168,7 +187,12 @@ fn dot(w: Direction, a: Sym, b: Sym) -> Sign {
 #[inline]
 pub fn orient(p: RankedPoint, q: RankedPoint, r: RankedPoint) -> Sign {
     match predicates::orient(p.point, q.point, r.point) {
-        Sign::Zero => cross(Sym::vertex(q), Sym::vertex(p), Sym::vertex(r), Sym::vertex(p)),
+        Sign::Zero => cross(
+            Sym::vertex(q),
+            Sym::vertex(p),
+            Sym::vertex(r),
+            Sym::vertex(p),
+        ),
         s => s,
     }
 }
@@ -176,7 +200,12 @@ pub fn orient(p: RankedPoint, q: RankedPoint, r: RankedPoint) -> Sign {
 /// Perturbed [`predicates::orient_query`]: side of the query point `q` w.r.t. `a → b`.
 /// Never `Zero` unless `a` and `b` have the same rank.
 pub fn orient_query(a: RankedPoint, b: RankedPoint, q: QueryPoint) -> Sign {
-    cross(Sym::vertex(b), Sym::vertex(a), Sym::query(q), Sym::vertex(a))
+    cross(
+        Sym::vertex(b),
+        Sym::vertex(a),
+        Sym::query(q),
+        Sym::vertex(a),
+    )
 }
 
 /// Side of the vertex `v` w.r.t. the line through `q` with direction `d`: sign of
@@ -188,7 +217,12 @@ pub fn side_of_line(q: QueryPoint, d: Direction, v: RankedPoint) -> Sign {
 /// Perturbed [`predicates::parallel_offset`] for two vertices: `Positive` if the line of
 /// direction `d` through `s` is left of the one through `r`. Never `Zero` for distinct ranks.
 pub fn parallel_offset(d: Direction, r: RankedPoint, s: RankedPoint) -> Sign {
-    cross(Sym::constant(d), Sym::ORIGIN, Sym::vertex(s), Sym::vertex(r))
+    cross(
+        Sym::constant(d),
+        Sym::ORIGIN,
+        Sym::vertex(s),
+        Sym::vertex(r),
+    )
 }
 
 /// Perturbed order along direction `d` of the query point `q` and the vertex `v`:
@@ -207,7 +241,12 @@ pub fn along(d: Direction, p: RankedPoint, r: RankedPoint) -> Sign {
 /// the counter-clockwise edge `a → b`; `Positive` if the object is ahead of `q`.
 /// Never `Zero` for distinct `a`, `b`.
 pub fn object_ahead(q: QueryPoint, d: Direction, a: RankedPoint, b: RankedPoint) -> Sign {
-    let crossing = cross(Sym::constant(d), Sym::ORIGIN, Sym::vertex(b), Sym::vertex(a));
+    let crossing = cross(
+        Sym::constant(d),
+        Sym::ORIGIN,
+        Sym::vertex(b),
+        Sym::vertex(a),
+    );
     orient_query(a, b, q).times(crossing)
 }
 
@@ -222,7 +261,11 @@ fn upper(head: Sym, tail: Sym) -> bool {
 fn direction_cmp_sym(p1: Sym, q1: Sym, p2: Sym, q2: Sym) -> Ordering {
     let (h1, h2) = (upper(q1, p1), upper(q2, p2));
     if h1 != h2 {
-        return if h1 { Ordering::Less } else { Ordering::Greater };
+        return if h1 {
+            Ordering::Less
+        } else {
+            Ordering::Greater
+        };
     }
     match cross(q1, p1, q2, p2) {
         Sign::Positive => Ordering::Less,
@@ -233,8 +276,18 @@ fn direction_cmp_sym(p1: Sym, q1: Sym, p2: Sym, q2: Sym) -> Ordering {
 
 /// Perturbed [`predicates::direction_cmp`]: order of the directions of `q1 − p1` and
 /// `q2 − p2` by angle in `[0, 2π)` from +x. `Equal` only for the same pair of points.
-pub fn direction_cmp(p1: RankedPoint, q1: RankedPoint, p2: RankedPoint, q2: RankedPoint) -> Ordering {
-    direction_cmp_sym(Sym::vertex(p1), Sym::vertex(q1), Sym::vertex(p2), Sym::vertex(q2))
+pub fn direction_cmp(
+    p1: RankedPoint,
+    q1: RankedPoint,
+    p2: RankedPoint,
+    q2: RankedPoint,
+) -> Ordering {
+    direction_cmp_sym(
+        Sym::vertex(p1),
+        Sym::vertex(q1),
+        Sym::vertex(p2),
+        Sym::vertex(q2),
+    )
 }
 
 /// Order of the directions from the query point `q` to the vertices `v1` and `v2`, by
@@ -263,27 +316,46 @@ pub struct Angle {
 
 impl Angle {
     /// θ = 0, the direction +x (the permanent wall of the line space).
-    pub const ZERO: Angle = Angle { head: Sym { x: 1, y: 0, rank: None }, tail: Sym::ORIGIN };
+    pub const ZERO: Angle = Angle {
+        head: Sym {
+            x: 1,
+            y: 0,
+            rank: None,
+        },
+        tail: Sym::ORIGIN,
+    };
 
     /// The direction of `to − from`.
     pub fn of_pair(from: RankedPoint, to: RankedPoint) -> Angle {
-        Angle { head: Sym::vertex(to), tail: Sym::vertex(from) }
+        Angle {
+            head: Sym::vertex(to),
+            tail: Sym::vertex(from),
+        }
     }
 
     /// The direction from the query point `q` to the vertex `v`.
     pub fn from_query(q: QueryPoint, v: RankedPoint) -> Angle {
-        Angle { head: Sym::vertex(v), tail: Sym::query(q) }
+        Angle {
+            head: Sym::vertex(v),
+            tail: Sym::query(q),
+        }
     }
 
     /// A constant direction.
     pub fn constant(d: Direction) -> Angle {
-        Angle { head: Sym::constant(d), tail: Sym::ORIGIN }
+        Angle {
+            head: Sym::constant(d),
+            tail: Sym::ORIGIN,
+        }
     }
 
     /// The opposite direction, θ + π.
     #[must_use]
     pub fn reversed(self) -> Angle {
-        Angle { head: self.tail, tail: self.head }
+        Angle {
+            head: self.tail,
+            tail: self.head,
+        }
     }
 
     /// Order on the circle by angle in `[0, 2π)` from +x.
@@ -302,6 +374,22 @@ impl Angle {
     /// through the vertex `r`: `Positive` if the line through `r` lies to the left.
     pub fn offset_cmp_query(&self, q: QueryPoint, r: RankedPoint) -> Sign {
         cross(self.head, self.tail, Sym::vertex(r), Sym::query(q))
+    }
+
+    /// Point against object along the line of direction θ through the vertex `o`, which
+    /// crosses the counter-clockwise edge `e0 → e1` of another object: `Positive` if the
+    /// object lies ahead of `o`. This is `orient(e0, e1, o) · cross(d, e1 − e0)` (see
+    /// [`predicates::object_ahead`]); both factors are perturbed, so never `Zero` for
+    /// distinct ranks.
+    pub fn object_ahead_of_vertex(&self, o: RankedPoint, e0: RankedPoint, e1: RankedPoint) -> Sign {
+        let crossing = cross(self.head, self.tail, Sym::vertex(e1), Sym::vertex(e0));
+        orient(e0, e1, o).times(crossing)
+    }
+
+    /// As [`Angle::object_ahead_of_vertex`], from a query point.
+    pub fn object_ahead_of_query(&self, q: QueryPoint, e0: RankedPoint, e1: RankedPoint) -> Sign {
+        let crossing = cross(self.head, self.tail, Sym::vertex(e1), Sym::vertex(e0));
+        orient_query(e0, e1, q).times(crossing)
     }
 
     /// Order of the vertices `p` and `r` along a line of direction θ: `Positive` if `r`
@@ -363,6 +451,9 @@ mod tests {
         // q + (ε, ε²) is just above the axis: the directions to a and b point slightly
         // below +x, i.e. near 2π; the nearer vertex a is further below, so it comes first.
         assert_eq!(o, Ordering::Less);
-        assert_eq!(direction_cmp_query_dir(q, a, Direction::new(1, 0).unwrap()), Ordering::Greater);
+        assert_eq!(
+            direction_cmp_query_dir(q, a, Direction::new(1, 0).unwrap()),
+            Ordering::Greater
+        );
     }
 }

@@ -1,0 +1,104 @@
+//! The line space: oriented lines `(θ, u)` (DESIGN.md §3).
+//!
+//! θ is the direction, an [`Angle`]; `u = cross(d(θ), p)` is the signed offset of the line
+//! through `p`, growing to the *left* of the direction. For a fixed θ, turn the plane so
+//! that θ points along +t: lines are horizontal, u is height, t is the position along the
+//! line.
+//!
+//! * The lines meeting object O form its **sheet**: for each θ the band
+//!   `u_lower(θ) ≤ u ≤ u_upper(θ)`, bounded by two **chains** of tangent lines
+//!   ([`Chain`]): the lower one (O on the left of the line) and the upper one (O on the
+//!   right). A chain is one sinusoid arc per vertex of O, breaking at edge directions.
+//! * A **bitangent** is a line on two chains; a free one (nothing between the tangent
+//!   points) is a vertex of the visibility complex.
+//! * The **cross-section** at θ lists the maximal free segments of direction θ as
+//!   intervals in u with a floor and a ceiling object (Fig. 5 of the paper).
+
+mod bitangent;
+#[cfg(feature = "alloc")]
+mod cross_section;
+
+pub use bitangent::{bitangents, is_free, Bitangent};
+#[cfg(feature = "alloc")]
+pub use cross_section::{cross_section, Interval};
+
+use crate::geom::sos::{Angle, RankedPoint};
+use crate::geom::Sign;
+use crate::scene::{ObjectId, SceneRef};
+
+/// Which boundary of a sheet.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Bound {
+    /// Tangent lines with the object on their left: the smallest u meeting the object.
+    /// Lines above (larger u) cross the object.
+    Lower,
+    /// Tangent lines with the object on their right: the largest u meeting the object.
+    /// Lines below cross the object.
+    Upper,
+}
+
+/// One boundary curve of a sheet: the tangent lines of `object` on side `bound`. Arcs of
+/// the partition (primary walls) are pieces of chains.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Chain {
+    /// The tangent object.
+    pub object: ObjectId,
+    /// Which of its two chains.
+    pub bound: Bound,
+}
+
+/// The vertex of `object` through which its `bound` tangent line of direction θ passes,
+/// as a global vertex index (unique under the perturbation).
+///
+/// Cost: one offset comparison per vertex of the object.
+pub fn tangent_vertex(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    angle: &Angle,
+    bound: Bound,
+) -> usize {
+    let Some(obj) = scene.object(object) else {
+        return 0;
+    };
+    let first = obj.first_vertex();
+    let mut best = first;
+    for i in first + 1..first + obj.len() {
+        // Lower: keep the vertex whose line is lowest (others are left of it).
+        let other_left = angle.offset_cmp(ranked(scene, best), ranked(scene, i)) == Sign::Positive;
+        let better = match bound {
+            Bound::Lower => !other_left,
+            Bound::Upper => other_left,
+        };
+        if better {
+            best = i;
+        }
+    }
+    best
+}
+
+/// The vertex with global index `i` and its perturbation rank.
+#[inline]
+pub(crate) fn ranked(scene: &SceneRef<'_>, i: usize) -> RankedPoint {
+    RankedPoint::vertex(scene.vertices().get(i).copied().unwrap_or_default(), i)
+}
+
+/// Whether the object is ahead of vertex `o` along the line of direction θ through `o`.
+/// `None` if the line does not cross the object (perturbed).
+pub(crate) fn object_ahead_of(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    angle: &Angle,
+    o: RankedPoint,
+) -> Option<bool> {
+    let obj = scene.object(object)?;
+    let first = obj.first_vertex();
+    let n = obj.len();
+    // A counter-clockwise edge whose endpoints lie on opposite sides of the line.
+    (0..n).find_map(|k| {
+        let (a, b) = (ranked(scene, first + k), ranked(scene, first + (k + 1) % n));
+        let (sa, sb) = (angle.offset_cmp(o, a), angle.offset_cmp(o, b));
+        (sa != sb).then(|| angle.object_ahead_of_vertex(o, a, b) == Sign::Positive)
+    })
+}

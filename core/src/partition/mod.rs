@@ -1,0 +1,193 @@
+//! The cylindrical partition of line space: the visibility complex as it is stored and
+//! walked (DESIGN.md §3).
+//!
+//! A **face** of the complex is a connected set of maximal free segments with the same
+//! floor and ceiling; in the `(θ, u)` cylinder it is a region bounded by chains. Each face
+//! is cut by vertical (**secondary**) walls θ = const into **cylinders**: trapezoids with
+//! one bottom and one top arc (pieces of chains; the **primary** walls) times the free
+//! t-range between floor and ceiling.
+//!
+//! Walls: the permanent wall θ = 0, and at every vertex of the complex (a directed free
+//! bitangent through tangent points `p` then `q`, objects P then Q) the walls that the
+//! local picture dictates. Near the vertex the chains of P and Q cross and cut the plane
+//! into four wedges; in each wedge a different subset of {P, Q} is crossed between the
+//! objects X before `p` and Y after `q`, and six faces meet: (X,P) and (Q,Y) pass by, and
+//! four faces have a corner at the vertex —
+//!
+//! | wedge | crossed | corner face | at the vertex |
+//! |---|---|---|---|
+//! | top (above both chains) | P iff P-lower, Q iff Q-lower | see below | wall up: its bottom arc switches from Q's chain to P's |
+//! | bottom | P iff P-upper, Q iff Q-upper | | wall down: its top arc switches from P's chain to Q's |
+//! | left (θ < θ_v, between) | P iff P-lower, Q iff Q-upper | | its cylinder closes |
+//! | right (θ > θ_v, between) | P iff P-upper, Q iff Q-lower | | a cylinder opens |
+//!
+//! The corner face for the crossed subset S is (X,Y) for {}, (P,Y) for {P}, (X,Q) for {Q}
+//! and (P,Q) for {P,Q}. Before θ_v the chain of Q lies above that of P (the line through
+//! the farther point `q` turns left of the one through `p` when θ decreases).
+//!
+//! Walls run from a vertex up or down to the nearest arc of their face, so the partition
+//! is canonical: it depends on the scene only. Consequently every vertex closes three
+//! cylinders and opens three, and the number of cylinders is `3n + 1 + 3V` for `n`
+//! objects and `V` vertices (the cross-section at θ = 0 has `3n + 1` intervals).
+
+#[cfg(feature = "alloc")]
+mod sweep;
+#[cfg(feature = "alloc")]
+mod validate;
+
+#[cfg(feature = "alloc")]
+pub use sweep::build_by_sweep;
+#[cfg(feature = "alloc")]
+pub use validate::ComplexError;
+
+use crate::ids::id_type;
+use crate::line_space::{Bitangent, Chain};
+use crate::scene::ObjectId;
+
+id_type!(
+    /// A cylinder of the partition.
+    CylinderId
+);
+id_type!(
+    /// A vertex of the complex: a directed free bitangent.
+    VertexId
+);
+
+/// A vertex of the complex: a directed free bitangent.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Vertex {
+    /// The line, its tangent points and chains.
+    pub bitangent: Bitangent,
+}
+
+/// A secondary wall: a vertical line θ = const in line space.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Wall {
+    /// θ = 0 (as a left wall) or θ = 2π (as a right wall).
+    Zero,
+    /// θ of a vertex of the complex.
+    Vertex(VertexId),
+}
+
+/// One cylinder: a trapezoid in `(θ, u)` times the free segments between floor and ceiling.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Cylinder {
+    /// Object behind the free segments (`None`: infinity).
+    pub floor: Option<ObjectId>,
+    /// Object ahead of the free segments (`None`: infinity) — what a ray in this cylinder sees.
+    pub ceiling: Option<ObjectId>,
+    /// Bottom arc (`None`: unbounded below).
+    pub bottom: Option<Chain>,
+    /// Top arc (`None`: unbounded above).
+    pub top: Option<Chain>,
+    /// Left wall.
+    pub left: Wall,
+    /// Right wall.
+    pub right: Wall,
+    /// The cylinder of the same face across the left wall (`None` if the face starts here).
+    pub left_neighbour: Option<CylinderId>,
+    /// The cylinder of the same face across the right wall (`None` if the face ends here).
+    pub right_neighbour: Option<CylinderId>,
+}
+
+/// The visibility complex of a scene as a cylindrical partition.
+#[cfg(feature = "alloc")]
+#[derive(Clone, Debug, Default)]
+pub struct Complex {
+    pub(crate) vertices: alloc::vec::Vec<Vertex>,
+    pub(crate) cylinders: alloc::vec::Vec<Cylinder>,
+}
+
+#[cfg(feature = "alloc")]
+impl Complex {
+    /// The vertices (directed free bitangents), sorted by θ.
+    pub fn vertices(&self) -> &[Vertex] {
+        &self.vertices
+    }
+
+    /// The cylinders.
+    pub fn cylinders(&self) -> &[Cylinder] {
+        &self.cylinders
+    }
+
+    /// The cylinder with this id.
+    pub fn cylinder(&self, id: CylinderId) -> Option<&Cylinder> {
+        self.cylinders.get(id.index())
+    }
+
+    /// The vertex with this id.
+    pub fn vertex(&self, id: VertexId) -> Option<&Vertex> {
+        self.vertices.get(id.index())
+    }
+
+    /// Number of undirected free bitangents between two different objects, counted from the
+    /// vertices (each segment is a vertex in both directions).
+    pub fn free_bitangents(&self) -> usize {
+        self.vertices.len() / 2
+    }
+
+    /// The angle of a wall; `None` for θ = 0 (which is 0 on the left and 2π on the right).
+    pub fn wall_angle(
+        &self,
+        scene: &crate::scene::SceneRef<'_>,
+        wall: Wall,
+    ) -> Option<crate::geom::sos::Angle> {
+        match wall {
+            Wall::Zero => None,
+            Wall::Vertex(v) => self.vertex(v).map(|v| v.bitangent.angle(scene)),
+        }
+    }
+
+    /// The cylinders whose open θ-range contains `angle` (by a scan: O(cylinders)).
+    pub fn cylinders_at<'s>(
+        &'s self,
+        scene: &'s crate::scene::SceneRef<'_>,
+        angle: &'s crate::geom::sos::Angle,
+    ) -> impl Iterator<Item = &'s Cylinder> + 's {
+        use core::cmp::Ordering;
+        self.cylinders.iter().filter(move |c| {
+            let after_left = self
+                .wall_angle(scene, c.left)
+                .is_none_or(|l| l.cmp_angle(angle) == Ordering::Less);
+            let before_right = self
+                .wall_angle(scene, c.right)
+                .is_none_or(|r| angle.cmp_angle(&r) == Ordering::Less);
+            after_left && before_right
+        })
+    }
+
+    /// Number of faces: connected chains of cylinders across secondary walls.
+    pub fn faces(&self) -> usize {
+        // A face is a path (born at a vertex, dies at a vertex) or a cycle through θ = 0.
+        let born = self
+            .cylinders
+            .iter()
+            .filter(|c| c.left_neighbour.is_none())
+            .count();
+        let mut on_cycle = 0;
+        let mut seen = alloc::vec![false; self.cylinders.len()];
+        for start in 0..self.cylinders.len() {
+            if seen[start] {
+                continue;
+            }
+            // Walk right until the chain ends or returns; bounded by the number of cylinders.
+            let mut cur = start;
+            let mut cycle = false;
+            for _ in 0..self.cylinders.len() {
+                seen[cur] = true;
+                match self.cylinders[cur].right_neighbour {
+                    Some(n) if n.index() == start => {
+                        cycle = true;
+                        break;
+                    }
+                    Some(n) if !seen[n.index()] => cur = n.index(),
+                    _ => break,
+                }
+            }
+            if cycle {
+                on_cycle += 1;
+            }
+        }
+        born + on_cycle
+    }
+}

@@ -1,0 +1,153 @@
+//! Invariants of a complex (spade's `sanity_check` idea): called by tests and fuzz targets
+//! after every build.
+
+use super::{Complex, Wall};
+use crate::geom::sos::Angle;
+use crate::line_space::{cross_section, Interval};
+use crate::scene::SceneRef;
+
+/// Why a complex is inconsistent (a bug, or corrupt input in a loaded file).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[non_exhaustive]
+pub enum ComplexError {
+    /// More cylinders or vertices than `u32` ids can address.
+    TooLarge,
+    /// The sweep found no open cylinder for a corner face at this vertex (a bug).
+    SweepLostCylinder {
+        /// Index of the vertex.
+        vertex: usize,
+    },
+    /// A cylinder open at θ = 2π has no counterpart at θ = 0 (a bug).
+    SweepUnmatchedAtZero,
+    /// Left/right adjacency is not symmetric, or neighbours disagree on floor, ceiling or wall.
+    Adjacency {
+        /// The cylinder at fault.
+        cylinder: usize,
+    },
+    /// A cylinder or neighbour id is out of range.
+    IdOutOfRange {
+        /// The cylinder at fault.
+        cylinder: usize,
+    },
+    /// The cylinders crossing a direction disagree with the cross-section there.
+    CrossSection,
+    /// Counts break `cylinders = 3·objects + 1 + 3·vertices`.
+    Count,
+}
+
+impl core::fmt::Display for ComplexError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ComplexError::TooLarge => write!(f, "complex too large for 32-bit ids"),
+            ComplexError::SweepLostCylinder { vertex } => {
+                write!(f, "vertex {vertex}: no open cylinder for a corner face")
+            }
+            ComplexError::SweepUnmatchedAtZero => {
+                write!(f, "cylinder open at 2π has no match at 0")
+            }
+            ComplexError::Adjacency { cylinder } => {
+                write!(f, "cylinder {cylinder}: adjacency is inconsistent")
+            }
+            ComplexError::IdOutOfRange { cylinder } => {
+                write!(f, "cylinder {cylinder}: id out of range")
+            }
+            ComplexError::CrossSection => write!(f, "cylinders disagree with the cross-section"),
+            ComplexError::Count => write!(f, "cylinder count breaks 3n + 1 + 3V"),
+        }
+    }
+}
+
+impl Complex {
+    /// Checks the structural invariants: ids in range, left/right adjacency symmetric with
+    /// the same floor, ceiling and shared wall, every vertex closing and opening three
+    /// cylinders, the count `3n + 1 + 3V`, and that the cylinders crossing θ = 0 are
+    /// exactly the cross-section there.
+    pub fn validate(&self, scene: &SceneRef<'_>) -> Result<(), ComplexError> {
+        let nc = self.cylinders.len();
+        for (i, c) in self.cylinders.iter().enumerate() {
+            let wall_ok = |w: Wall| match w {
+                Wall::Zero => true,
+                Wall::Vertex(v) => v.index() < self.vertices.len(),
+            };
+            if !wall_ok(c.left) || !wall_ok(c.right) {
+                return Err(ComplexError::IdOutOfRange { cylinder: i });
+            }
+            if let Some(r) = c.right_neighbour {
+                let n = self
+                    .cylinders
+                    .get(r.index())
+                    .ok_or(ComplexError::IdOutOfRange { cylinder: i })?;
+                if n.left_neighbour.map(|l| l.index()) != Some(i)
+                    || n.floor != c.floor
+                    || n.ceiling != c.ceiling
+                    || n.left != c.right
+                {
+                    return Err(ComplexError::Adjacency { cylinder: i });
+                }
+            }
+            if let Some(l) = c.left_neighbour {
+                let n = self
+                    .cylinders
+                    .get(l.index())
+                    .ok_or(ComplexError::IdOutOfRange { cylinder: i })?;
+                if n.right_neighbour.map(|r| r.index()) != Some(i) {
+                    return Err(ComplexError::Adjacency { cylinder: i });
+                }
+            }
+        }
+        let mut closes = alloc::vec![0u8; self.vertices.len()];
+        let mut opens = alloc::vec![0u8; self.vertices.len()];
+        for c in &self.cylinders {
+            if let Wall::Vertex(v) = c.right {
+                closes[v.index()] = closes[v.index()].saturating_add(1);
+            }
+            if let Wall::Vertex(v) = c.left {
+                opens[v.index()] = opens[v.index()].saturating_add(1);
+            }
+        }
+        if closes.iter().chain(&opens).any(|&k| k != 3)
+            || nc != 3 * scene.len() + 1 + 3 * self.vertices.len()
+        {
+            return Err(ComplexError::Count);
+        }
+        let mut at_zero: alloc::vec::Vec<Interval> = self
+            .cylinders
+            .iter()
+            .filter(|c| c.left == Wall::Zero)
+            .map(|c| Interval {
+                floor: c.floor,
+                ceiling: c.ceiling,
+                bottom: c.bottom,
+                top: c.top,
+            })
+            .collect();
+        let mut want = cross_section(scene, &Angle::ZERO);
+        at_zero.sort();
+        want.sort();
+        if at_zero != want {
+            return Err(ComplexError::CrossSection);
+        }
+        Ok(())
+    }
+
+    /// Checks that the cylinders whose θ-range contains `angle` are exactly the intervals
+    /// of the brute-force cross-section at `angle` (which must not be a vertex's angle).
+    pub fn validate_at(&self, scene: &SceneRef<'_>, angle: &Angle) -> Result<(), ComplexError> {
+        let mut got: alloc::vec::Vec<Interval> = self
+            .cylinders_at(scene, angle)
+            .map(|c| Interval {
+                floor: c.floor,
+                ceiling: c.ceiling,
+                bottom: c.bottom,
+                top: c.top,
+            })
+            .collect();
+        let mut want = cross_section(scene, angle);
+        got.sort();
+        want.sort();
+        if got != want {
+            return Err(ComplexError::CrossSection);
+        }
+        Ok(())
+    }
+}
