@@ -141,3 +141,198 @@ fn cylinders_crossing_any_direction_are_the_cross_section() {
         }
     }
 }
+
+mod against_reference {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use vcx::geom::predicates::Direction;
+    use vcx::geom::sos::{self, RankedPoint};
+    use vcx::partition::Location;
+    use vcx::QueryPoint;
+    use vcx_tests::reference::{free_bitangents, shoot_perturbed, sos_orient, Vec2};
+
+    /// Scale of the randomized checks: `VCX_LONG=1` multiplies it by 20.
+    fn scale(n: usize) -> usize {
+        if std::env::var_os("VCX_LONG").is_some() {
+            n * 20
+        } else {
+            n
+        }
+    }
+
+    fn families() -> Vec<(String, Scene)> {
+        let mut out = Vec::new();
+        for (n, seed) in [(9, 1), (25, 2), (49, 3), (100, 4)] {
+            out.push((
+                format!("grid {n}"),
+                generate(SceneKind::Grid, n, seed).unwrap().scene,
+            ));
+        }
+        out.push((
+            "mixed 20".into(),
+            generate(SceneKind::Mixed, 20, 5).unwrap().scene,
+        ));
+        out.push((
+            "hall 6".into(),
+            generate(SceneKind::Hall, 6, 6).unwrap().scene,
+        ));
+        // Collinear lattices: shared supporting lines everywhere.
+        let cells: Vec<(i32, i32)> = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).collect();
+        out.push(("lattice 4x4".into(), scene(&boxes(&cells, 2, 1))));
+        let row: Vec<(i32, i32)> = (0..6).map(|i| (i, 0)).collect();
+        out.push(("row of 6".into(), scene(&boxes(&row, 3, 1))));
+        // Near-touching pairs: one grid unit (2^-16) apart.
+        let t = |x: i32, y: i32| Point::from_raw(x, y).unwrap();
+        let u = 1 << 16;
+        out.push((
+            "near-touching".into(),
+            Scene::new(
+                [
+                    vec![t(0, 0), t(4 * u, 0), t(4 * u, 4 * u), t(0, 4 * u)],
+                    vec![
+                        t(4 * u + 1, 0),
+                        t(8 * u, 0),
+                        t(8 * u, 4 * u),
+                        t(4 * u + 1, 4 * u),
+                    ],
+                    vec![t(0, 4 * u + 1), t(4 * u, 4 * u + 1), t(2 * u, 6 * u)],
+                ]
+                .iter()
+                .map(|p| (Material::Opaque, &p[..])),
+            )
+            .unwrap(),
+        ));
+        out
+    }
+
+    #[test]
+    fn free_bitangents_match_the_reference() {
+        for (name, s) in families() {
+            let s = s.as_ref();
+            let c = build_by_sweep(&s).unwrap();
+            c.validate(&s).unwrap();
+            let want = free_bitangents(s);
+            assert_eq!(c.free_bitangents(), want.undirected, "{name}");
+            assert_eq!(c.vertices().len(), want.directed, "{name}");
+        }
+    }
+
+    /// The core's perturbed orientation equals the reference's symbolic expansion on the
+    /// vertices of a collinear lattice (most triples are degenerate there).
+    #[test]
+    fn perturbed_orientation_matches_the_reference() {
+        let cells: Vec<(i32, i32)> = (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).collect();
+        let s = scene(&boxes(&cells, 2, 2));
+        let v = s.as_ref().vertices();
+        for i in 0..v.len() {
+            for j in 0..v.len() {
+                for k in 0..v.len() {
+                    if i == j || j == k || i == k {
+                        continue;
+                    }
+                    let core = sos::orient(
+                        RankedPoint::vertex(v[i], i),
+                        RankedPoint::vertex(v[j], j),
+                        RankedPoint::vertex(v[k], k),
+                    );
+                    let (a, b, c) = (
+                        Vec2::from_point(v[i]),
+                        Vec2::from_point(v[j]),
+                        Vec2::from_point(v[k]),
+                    );
+                    let r = sos_orient((i as u64 + 1, &a), (j as u64 + 1, &b), (k as u64 + 1, &c));
+                    assert_eq!(core, r, "{i} {j} {k}");
+                }
+            }
+        }
+    }
+
+    /// Random rays from free points: forward and backward objects of the located cylinder
+    /// agree with exact ray shooting (q perturbed to q + (ε, ε²), as in the core). Origins
+    /// and directions are drawn to hit degeneracies: vertices, edge extensions, bitangents.
+    #[test]
+    fn locate_matches_ray_shooting() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut checked = 0usize;
+        for (name, s) in families() {
+            let s = s.as_ref();
+            let c = build_by_sweep(&s).unwrap();
+            let v = s.vertices();
+            let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+            for p in v {
+                lo = (lo.0.min(p.x()), lo.1.min(p.y()));
+                hi = (hi.0.max(p.x()), hi.1.max(p.y()));
+            }
+            let rays = scale(2000);
+            for _ in 0..rays {
+                let kind = rng.gen_range(0..4);
+                let (a, b) = (v[rng.gen_range(0..v.len())], v[rng.gen_range(0..v.len())]);
+                let (q, d) = match kind {
+                    // Through two vertices: from a point on the line a-b beyond a.
+                    0 if a != b => {
+                        let (dx, dy) = (b.x() as i64 - a.x() as i64, b.y() as i64 - a.y() as i64);
+                        let k = rng.gen_range(-3i64..=3);
+                        let q = QueryPoint::from_raw(
+                            (a.x() as i64 + k * dx) << 16,
+                            (a.y() as i64 + k * dy) << 16,
+                        );
+                        (q, Direction::new(dx, dy))
+                    }
+                    // Axis-aligned rays through grid points (floor-plan degeneracies).
+                    1 => {
+                        let q = QueryPoint::from_raw(
+                            (rng.gen_range(lo.0 - 65536..=hi.0 + 65536) as i64 & !0xffff) << 16,
+                            (rng.gen_range(lo.1 - 65536..=hi.1 + 65536) as i64 & !0xffff) << 16,
+                        );
+                        let d = [(1, 0), (0, 1), (-1, 0), (0, -1)][rng.gen_range(0..4)];
+                        (q, Direction::new(d.0, d.1))
+                    }
+                    // Aimed at a vertex from a random point.
+                    2 => {
+                        let q = (
+                            rng.gen_range(lo.0..=hi.0) as i64,
+                            rng.gen_range(lo.1..=hi.1) as i64,
+                        );
+                        (
+                            QueryPoint::from_raw(q.0 << 16, q.1 << 16),
+                            Direction::new(a.x() as i64 - q.0, a.y() as i64 - q.1),
+                        )
+                    }
+                    _ => {
+                        let q = QueryPoint::from_raw(
+                            rng.gen_range(lo.0 as i64..=hi.0 as i64) << 16,
+                            rng.gen_range(lo.1 as i64..=hi.1 as i64) << 16,
+                        );
+                        (
+                            q,
+                            Direction::new(
+                                rng.gen_range(-1000..=1000),
+                                rng.gen_range(-1000..=1000),
+                            ),
+                        )
+                    }
+                };
+                let (Some(q), Some(d)) = (q, d) else { continue };
+                let rq = Vec2::from_query(q);
+                let rd = Vec2::from_i64(d.x, d.y);
+                match (c.locate(&s, q, d), shoot_perturbed(s, &rq, &rd)) {
+                    (Some(Location::Free { cylinder }), Ok(want)) => {
+                        let cyl = c.cylinder(cylinder).unwrap();
+                        assert_eq!(
+                            (cyl.ceiling, cyl.floor),
+                            (want.forward, want.backward),
+                            "{name}: q {q:?} d {d:?}"
+                        );
+                        checked += 1;
+                    }
+                    (Some(Location::Inside { .. } | Location::OnBoundary { .. }), Err(_)) => {}
+                    (got, want) => {
+                        panic!("{name}: q {q:?} d {d:?}: core {got:?}, reference {want:?}")
+                    }
+                }
+            }
+        }
+        assert!(checked > scale(2000) * 5, "too few free rays: {checked}");
+    }
+}

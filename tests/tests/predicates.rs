@@ -1,7 +1,7 @@
 //! The predicates of `vcx::geom` against exact big-integer arithmetic, at the extremes of the
 //! coordinate range, and the consistency of the symbolic perturbation.
 
-use std::cmp::Ordering;
+use core::cmp::Ordering;
 
 use num_bigint::BigInt;
 use proptest::prelude::*;

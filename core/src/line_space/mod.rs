@@ -78,6 +78,24 @@ pub fn tangent_vertex(
     best
 }
 
+/// Whether the object is ahead of the query point `q` along the line of direction θ
+/// through it. `None` if the line does not cross the object (perturbed).
+pub(crate) fn object_ahead_of_query(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    angle: &Angle,
+    q: crate::geom::QueryPoint,
+) -> Option<bool> {
+    let obj = scene.object(object)?;
+    let first = obj.first_vertex();
+    let n = obj.len();
+    (0..n).find_map(|k| {
+        let (a, b) = (ranked(scene, first + k), ranked(scene, first + (k + 1) % n));
+        let (sa, sb) = (angle.offset_cmp_query(q, a), angle.offset_cmp_query(q, b));
+        (sa != sb).then(|| angle.object_ahead_of_query(q, a, b) == Sign::Positive)
+    })
+}
+
 /// The vertex with global index `i` and its perturbation rank.
 #[inline]
 pub(crate) fn ranked(scene: &SceneRef<'_>, i: usize) -> RankedPoint {

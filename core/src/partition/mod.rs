@@ -31,10 +31,14 @@
 //! objects and `V` vertices (the cross-section at θ = 0 has `3n + 1` intervals).
 
 #[cfg(feature = "alloc")]
+mod locate;
+#[cfg(feature = "alloc")]
 mod sweep;
 #[cfg(feature = "alloc")]
 mod validate;
 
+#[cfg(feature = "alloc")]
+pub use locate::{point_in_scene, Location};
 #[cfg(feature = "alloc")]
 pub use sweep::build_by_sweep;
 #[cfg(feature = "alloc")]
@@ -143,16 +147,16 @@ impl Complex {
         &'s self,
         scene: &'s crate::scene::SceneRef<'_>,
         angle: &'s crate::geom::sos::Angle,
-    ) -> impl Iterator<Item = &'s Cylinder> + 's {
+    ) -> impl Iterator<Item = (CylinderId, &'s Cylinder)> + 's {
         use core::cmp::Ordering;
-        self.cylinders.iter().filter(move |c| {
+        self.cylinders.iter().enumerate().filter_map(move |(i, c)| {
             let after_left = self
                 .wall_angle(scene, c.left)
                 .is_none_or(|l| l.cmp_angle(angle) == Ordering::Less);
             let before_right = self
                 .wall_angle(scene, c.right)
                 .is_none_or(|r| angle.cmp_angle(&r) == Ordering::Less);
-            after_left && before_right
+            (after_left && before_right).then_some((CylinderId(i as u32), c))
         })
     }
 

@@ -135,7 +135,7 @@ impl Complex {
     pub fn validate_at(&self, scene: &SceneRef<'_>, angle: &Angle) -> Result<(), ComplexError> {
         let mut got: alloc::vec::Vec<Interval> = self
             .cylinders_at(scene, angle)
-            .map(|c| Interval {
+            .map(|(_, c)| Interval {
                 floor: c.floor,
                 ceiling: c.ceiling,
                 bottom: c.bottom,
