@@ -35,6 +35,8 @@ pub enum ComplexError {
     Count,
 }
 
+impl core::error::Error for ComplexError {}
+
 impl core::fmt::Display for ComplexError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {

@@ -75,6 +75,8 @@ pub enum SceneError {
     },
 }
 
+impl core::error::Error for SceneError {}
+
 impl core::fmt::Display for SceneError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
