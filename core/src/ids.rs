@@ -16,6 +16,9 @@ macro_rules! id_type {
                 self.0 as usize
             }
 
+            /// Id 0.
+            pub const ZERO: Self = $name(0);
+
             /// The id of arena index `i`; `None` beyond `u32`.
             #[inline]
             pub fn from_index(i: usize) -> Option<Self> {

@@ -21,6 +21,8 @@ mod ids;
 pub mod line_space;
 pub mod partition;
 pub mod scene;
+#[cfg(feature = "alloc")]
+pub mod walk;
 
 pub use geom::{Point, QueryPoint, Sign};
 #[cfg(feature = "alloc")]

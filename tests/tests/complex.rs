@@ -336,3 +336,121 @@ mod against_reference {
         assert!(checked > scale(2000) * 5, "too few free rays: {checked}");
     }
 }
+
+mod views {
+    use super::*;
+
+    /// Viewpoints per scene: `VCX_LONG=1` multiplies them by 20.
+    fn scale_views(n: usize) -> usize {
+        if std::env::var_os("VCX_LONG").is_some() {
+            n * 20
+        } else {
+            n
+        }
+    }
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use vcx::walk::view;
+    use vcx::QueryPoint;
+    use vcx_tests::reference::{self, Vec2};
+
+    /// (object, vertex id as written) of a global vertex index.
+    fn written(s: &vcx::SceneRef<'_>, k: usize) -> (u32, usize) {
+        for (i, o) in s.objects().iter().enumerate() {
+            if (o.first_vertex()..o.first_vertex() + o.len()).contains(&k) {
+                return (i as u32, o.written_vertex_id(k - o.first_vertex()));
+            }
+        }
+        panic!("vertex {k} out of range")
+    }
+
+    fn same_direction(v: (i128, i128), r: &Vec2) -> bool {
+        let d = Vec2::from_i64(v.0 as i64, v.1 as i64);
+        use num_traits::{Signed, Zero};
+        d.cross(r).is_zero() && d.dot(r).is_positive()
+    }
+
+    /// Compares the walked view with the reference; returns false if the viewpoint is not free.
+    fn check(
+        name: &str,
+        s: &vcx::SceneRef<'_>,
+        c: &vcx::partition::Complex,
+        q: QueryPoint,
+    ) -> bool {
+        let want = reference::view(*s, &Vec2::from_query(q));
+        let got = view(c, s, q);
+        let (want, got) = match (want, got) {
+            (Err(_), Err(_)) => return false,
+            (Ok(w), Ok(g)) => (w, g),
+            (w, g) => panic!("{name} q {q:?}: reference {w:?}, core {g:?}"),
+        };
+        let show = || format!("{name} q {q:?}\n core {got:#?}\n reference {want:#?}");
+        assert_eq!(got.len(), want.len(), "{}", show());
+        for (g, w) in got.iter().zip(&want) {
+            assert_eq!(g.object, w.value, "{}", show());
+            if w.start_vertex.is_some() {
+                assert!(same_direction(g.start.vector(), &w.start), "{}", show());
+            }
+            let gv = g.start_vertex.map(|k| written(s, k));
+            let wv = w.start_vertex.map(|v| (v.object.0, v.vertex));
+            assert_eq!(gv, wv, "{}", show());
+        }
+        true
+    }
+
+    #[test]
+    fn views_match_the_reference() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut scenes: Vec<(String, Scene)> = Vec::new();
+        for (n, seed) in [(9, 1), (25, 2), (64, 3)] {
+            scenes.push((
+                format!("grid {n}"),
+                generate(SceneKind::Grid, n, seed).unwrap().scene,
+            ));
+        }
+        let cells: Vec<(i32, i32)> = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).collect();
+        scenes.push(("lattice".into(), scene(&boxes(&cells, 2, 2))));
+        let mut checked = 0;
+        for (name, s) in &scenes {
+            let s = s.as_ref();
+            let c = build_by_sweep(&s).unwrap();
+            let v = s.vertices();
+            let (lo, hi) = v.iter().fold(
+                ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
+                |(lo, hi), p| {
+                    (
+                        (lo.0.min(p.x()), lo.1.min(p.y())),
+                        (hi.0.max(p.x()), hi.1.max(p.y())),
+                    )
+                },
+            );
+            for k in 0..scale_views(90) {
+                let q = match k % 3 {
+                    // Random points.
+                    0 => QueryPoint::from_raw(
+                        (rng.gen_range(lo.0 - 65536..=hi.0 + 65536) as i64) << 16,
+                        (rng.gen_range(lo.1 - 65536..=hi.1 + 65536) as i64) << 16,
+                    ),
+                    // On the line through two vertices (edge extensions, bitangents).
+                    1 => {
+                        let (a, b) = (v[rng.gen_range(0..v.len())], v[rng.gen_range(0..v.len())]);
+                        let t = rng.gen_range(-2i64..=3);
+                        QueryPoint::from_raw(
+                            (a.x() as i64 + t * (b.x() as i64 - a.x() as i64)) << 16,
+                            (a.y() as i64 + t * (b.y() as i64 - a.y() as i64)) << 16,
+                        )
+                    }
+                    // Grid points: axis-aligned degeneracies.
+                    _ => QueryPoint::from_raw(
+                        (rng.gen_range(lo.0..=hi.0) as i64 & !0xffff) << 16,
+                        (rng.gen_range(lo.1..=hi.1) as i64 & !0xffff) << 16,
+                    ),
+                };
+                if let Some(q) = q {
+                    checked += usize::from(check(name, &s, &c, q));
+                }
+            }
+        }
+        assert!(checked > scale_views(90) * 3, "{checked}");
+    }
+}

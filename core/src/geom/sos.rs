@@ -358,6 +358,42 @@ impl Angle {
         }
     }
 
+    /// Exact (unperturbed) order on the circle by angle in `[0, 2π)` from +x: `Equal` for
+    /// exactly the same direction. For output decisions such as dropping events of zero
+    /// angular width; construction and walking use [`Angle::cmp_angle`].
+    pub fn cmp_exact(&self, other: &Angle) -> Ordering {
+        let (ux, uy) = (self.head.x - self.tail.x, self.head.y - self.tail.y);
+        let (vx, vy) = (other.head.x - other.tail.x, other.head.y - other.tail.y);
+        let (hu, hv) = (upper_half(ux, uy), upper_half(vx, vy));
+        if hu != hv {
+            return if hu {
+                Ordering::Less
+            } else {
+                Ordering::Greater
+            };
+        }
+        0.cmp(&(ux * vy - uy * vx))
+    }
+
+    /// The direction vector (head − tail) on the query grid, exact.
+    pub fn vector(&self) -> (i128, i128) {
+        (self.head.x - self.tail.x, self.head.y - self.tail.y)
+    }
+
+    /// The angle in radians in `[0, 2π)`, for output only.
+    pub fn radians(&self) -> f64 {
+        let (x, y) = (
+            (self.head.x - self.tail.x) as f64,
+            (self.head.y - self.tail.y) as f64,
+        );
+        let a = libm::atan2(y, x);
+        if a < 0.0 {
+            a + 2.0 * core::f64::consts::PI
+        } else {
+            a
+        }
+    }
+
     /// Order on the circle by angle in `[0, 2π)` from +x.
     pub fn cmp_angle(&self, other: &Angle) -> Ordering {
         direction_cmp_sym(self.tail, self.head, other.tail, other.head)

@@ -96,9 +96,45 @@ pub(crate) fn object_ahead_of_query(
     })
 }
 
+/// The two tangent lines from the query point `q` (outside the object) to `object`: for
+/// each, the tangent vertex (global index) and the chain on which the oriented line from
+/// `q` through that vertex lies. The reversed line lies on the other chain.
+pub fn tangents_from(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    q: crate::geom::QueryPoint,
+) -> [(usize, Bound); 2] {
+    use crate::geom::sos::orient_query;
+    let mut out = [(0, Bound::Lower); 2];
+    let mut found = 0;
+    let Some(obj) = scene.object(object) else {
+        return out;
+    };
+    let (first, n) = (obj.first_vertex(), obj.len());
+    for k in 0..n {
+        let h = ranked(scene, first + k);
+        let prev = ranked(scene, first + (k + n - 1) % n);
+        let next = ranked(scene, first + (k + 1) % n);
+        // Side of the neighbours w.r.t. the line q → h: orient(q, h, x) = orient(h, x, q).
+        let (sp, sn) = (orient_query(h, prev, q), orient_query(h, next, q));
+        if sp == sn {
+            let bound = if sn == Sign::Positive {
+                Bound::Lower
+            } else {
+                Bound::Upper
+            };
+            if let Some(slot) = out.get_mut(found) {
+                *slot = (first + k, bound);
+            }
+            found += 1;
+        }
+    }
+    out
+}
+
 /// The vertex with global index `i` and its perturbation rank.
 #[inline]
-pub(crate) fn ranked(scene: &SceneRef<'_>, i: usize) -> RankedPoint {
+pub fn ranked(scene: &SceneRef<'_>, i: usize) -> RankedPoint {
     RankedPoint::vertex(scene.vertices().get(i).copied().unwrap_or_default(), i)
 }
 

@@ -59,6 +59,31 @@ pub fn point_in_scene(scene: &SceneRef<'_>, q: QueryPoint) -> Option<Location> {
 }
 
 impl Complex {
+    /// The cylinder among `candidates` (all crossing θ = `angle`) that contains the line of
+    /// direction θ through the free point `q`, in the layer containing `q`.
+    pub(crate) fn locate_among<'s>(
+        &'s self,
+        scene: &SceneRef<'_>,
+        q: QueryPoint,
+        angle: &Angle,
+        mut candidates: impl Iterator<Item = (CylinderId, &'s super::Cylinder)>,
+    ) -> Option<CylinderId> {
+        let below = |chain: crate::line_space::Chain| {
+            let v = tangent_vertex(scene, chain.object, angle, chain.bound);
+            angle.offset_cmp_query(q, ranked(scene, v))
+        };
+        candidates
+            .find(|(_, c)| {
+                c.bottom.is_none_or(|b| below(b) == Sign::Negative)
+                    && c.top.is_none_or(|t| below(t) == Sign::Positive)
+                    && c.floor
+                        .is_none_or(|f| object_ahead_of_query(scene, f, angle, q) == Some(false))
+                    && c.ceiling
+                        .is_none_or(|g| object_ahead_of_query(scene, g, angle, q) == Some(true))
+            })
+            .map(|(id, _)| id)
+    }
+
     /// Locates the ray from `q` in direction `d`: the cylinder containing it, or the object
     /// the point is in or on. A point on a bitangent, an edge's extension or a wall is
     /// decided by the perturbation (`q` moves to `q + (ε, ε²)`).
@@ -67,18 +92,7 @@ impl Complex {
             return Some(l);
         }
         let angle = Angle::constant(d);
-        let (cylinder, _) = self.cylinders_at(scene, &angle).find(|(_, c)| {
-            let below = |chain: crate::line_space::Chain| {
-                let v = tangent_vertex(scene, chain.object, &angle, chain.bound);
-                angle.offset_cmp_query(q, ranked(scene, v))
-            };
-            c.bottom.is_none_or(|b| below(b) == Sign::Negative)
-                && c.top.is_none_or(|t| below(t) == Sign::Positive)
-                && c.floor
-                    .is_none_or(|f| object_ahead_of_query(scene, f, &angle, q) == Some(false))
-                && c.ceiling
-                    .is_none_or(|g| object_ahead_of_query(scene, g, &angle, q) == Some(true))
-        })?;
+        let cylinder = self.locate_among(scene, q, &angle, self.cylinders_at(scene, &angle))?;
         Some(Location::Free { cylinder })
     }
 }

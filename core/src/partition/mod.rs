@@ -31,12 +31,16 @@
 //! objects and `V` vertices (the cross-section at θ = 0 has `3n + 1` intervals).
 
 #[cfg(feature = "alloc")]
+mod borders;
+#[cfg(feature = "alloc")]
 mod locate;
 #[cfg(feature = "alloc")]
 mod sweep;
 #[cfg(feature = "alloc")]
 mod validate;
 
+#[cfg(feature = "alloc")]
+pub use borders::{Layer, Side};
 #[cfg(feature = "alloc")]
 pub use locate::{point_in_scene, Location};
 #[cfg(feature = "alloc")]
@@ -100,6 +104,7 @@ pub struct Cylinder {
 pub struct Complex {
     pub(crate) vertices: alloc::vec::Vec<Vertex>,
     pub(crate) cylinders: alloc::vec::Vec<Cylinder>,
+    pub(crate) borders: borders::Borders,
 }
 
 #[cfg(feature = "alloc")]

@@ -236,8 +236,11 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         cylinders[id.index()].right_neighbour = Some(first);
         cylinders[first.index()].left_neighbour = Some(*id);
     }
-    Ok(Complex {
+    let mut complex = Complex {
         vertices,
         cylinders,
-    })
+        borders: Default::default(),
+    };
+    complex.borders = super::borders::build(scene, &complex);
+    Ok(complex)
 }
