@@ -1,8 +1,9 @@
-//! `vcx`: the command line of vcx — check and generate scenes (later: build, view, render,
-//! bench, demo).
+//! `vcx`: the command line of vcx — check and generate scenes, build the complex and
+//! locate rays in it (later: view, render, bench, demo).
 //!
-//! Errors are one line on stderr, `error: ` first, and exit status 2. A panic would be a
-//! bug; the hook below still turns it into one line and exit status 101.
+//! Errors are one line on stderr, `error: ` first, and exit status 2. A complex that
+//! cannot be built or fails its own checks is a bug: one line and exit status 3. A panic
+//! would be a bug too; the hook below still turns it into one line and exit status 101.
 
 mod cmd;
 
@@ -24,6 +25,10 @@ enum Command {
     Check(cmd::check::Args),
     /// Generate a test scene (the paper's Figs. 20-22) as a scene file.
     Gen(cmd::gen::Args),
+    /// Build the visibility complex of a scene and print its statistics.
+    Build(cmd::build::Args),
+    /// Locate a ray: the objects it sees ahead and behind, and its cylinder.
+    Locate(cmd::locate::Args),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +37,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check(args) => cmd::check::run(&args),
         Command::Gen(args) => cmd::gen::run(&args),
+        Command::Build(args) => cmd::build::run(&args),
+        Command::Locate(args) => cmd::locate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,7 +1,9 @@
 //! One module per subcommand. Each `run` returns `Result<(), Failure>`; `main` reports.
 
+pub mod build;
 pub mod check;
 pub mod gen;
+pub mod locate;
 
 use std::io::Write;
 use std::process::ExitCode;
