@@ -26,5 +26,5 @@ pub mod walk;
 
 pub use geom::{Point, QueryPoint, Sign};
 #[cfg(feature = "alloc")]
-pub use scene::Scene;
+pub use scene::{Scene, SubScene};
 pub use scene::{Eta, Material, Object, ObjectId, SceneError, SceneRef};

@@ -298,3 +298,43 @@ impl Scene {
         }
     }
 }
+
+/// A subset of a validated scene's objects, sharing its vertex array — so vertex ranks,
+/// and with them the perturbation, are those of the whole scene. Object ids in the
+/// subset's [`SceneRef`] are positions in the subset; [`SubScene::original`] maps back.
+/// Used for views (screens left out) and to compare the incremental construction with
+/// the partition of each prefix of the insertion order.
+#[cfg(feature = "alloc")]
+#[derive(Clone, Debug)]
+pub struct SubScene<'a> {
+    vertices: &'a [Point],
+    objects: alloc::vec::Vec<Object>,
+    ids: alloc::vec::Vec<ObjectId>,
+}
+
+#[cfg(feature = "alloc")]
+impl<'a> SubScene<'a> {
+    /// The objects of `scene` with the given ids, in that order (unknown ids are skipped).
+    /// Any subset of a valid scene is valid.
+    pub fn new(scene: SceneRef<'a>, ids: impl IntoIterator<Item = ObjectId>) -> SubScene<'a> {
+        let mut objects = alloc::vec::Vec::new();
+        let mut kept = alloc::vec::Vec::new();
+        for id in ids {
+            if let Some(o) = scene.object(id) {
+                objects.push(*o);
+                kept.push(id);
+            }
+        }
+        SubScene { vertices: scene.vertices, objects, ids: kept }
+    }
+
+    /// The validated view of the subset.
+    pub fn as_ref(&self) -> SceneRef<'_> {
+        SceneRef { vertices: self.vertices, objects: &self.objects }
+    }
+
+    /// The id in the whole scene of the subset's object `id`.
+    pub fn original(&self, id: ObjectId) -> Option<ObjectId> {
+        self.ids.get(id.0 as usize).copied()
+    }
+}
