@@ -406,6 +406,16 @@ impl Angle {
         cross(self.head, self.tail, Sym::vertex(r), Sym::vertex(p))
     }
 
+    /// [`Angle::offset_cmp`] just after θ (at θ + ε). Differs only for the two vertices
+    /// that define θ, whose lines coincide at θ: turning counter-clockwise, the line through
+    /// the farther one along the direction falls below (`cross(d + ε·d⊥, w) = −ε·dot(d, w)`).
+    pub fn offset_cmp_after(&self, p: RankedPoint, r: RankedPoint) -> Sign {
+        match self.offset_cmp(p, r) {
+            Sign::Zero => self.along_exact(p, r).flip(),
+            s => s,
+        }
+    }
+
     /// Offset order of the line of direction θ through the query point `q` and the one
     /// through the vertex `r`: `Positive` if the line through `r` lies to the left.
     pub fn offset_cmp_query(&self, q: QueryPoint, r: RankedPoint) -> Sign {

@@ -35,6 +35,8 @@ mod borders;
 #[cfg(feature = "alloc")]
 mod locate;
 #[cfg(feature = "alloc")]
+mod ric;
+#[cfg(feature = "alloc")]
 mod sweep;
 #[cfg(feature = "alloc")]
 mod validate;
@@ -43,6 +45,8 @@ mod validate;
 pub use borders::{Layer, Side};
 #[cfg(feature = "alloc")]
 pub use locate::{point_in_scene, Location};
+#[cfg(feature = "alloc")]
+pub use ric::{BuildOptions, History, HistoryStats};
 #[cfg(feature = "alloc")]
 pub use sweep::build_by_sweep;
 #[cfg(feature = "alloc")]

@@ -31,6 +31,14 @@ pub enum ComplexError {
     },
     /// The cylinders crossing a direction disagree with the cross-section there.
     CrossSection,
+    /// An insertion of the randomized construction lost track of its conflict cylinders
+    /// (a bug).
+    InsertionLost {
+        /// The object being inserted.
+        object: usize,
+        /// Where it got lost.
+        step: &'static str,
+    },
     /// Counts break `cylinders = 3·objects + 1 + 3·vertices`.
     Count,
 }
@@ -54,6 +62,9 @@ impl core::fmt::Display for ComplexError {
                 write!(f, "cylinder {cylinder}: id out of range")
             }
             ComplexError::CrossSection => write!(f, "cylinders disagree with the cross-section"),
+            ComplexError::InsertionLost { object, step } => {
+                write!(f, "inserting object {object}: conflict chain lost ({step})")
+            }
             ComplexError::Count => write!(f, "cylinder count breaks 3n + 1 + 3V"),
         }
     }

@@ -1,0 +1,231 @@
+//! The randomized incremental construction against the canonical partition of the
+//! rotational sweep, after every insertion, for several seeds.
+
+use vcx::partition::{build_by_sweep, Complex, History, Wall};
+use vcx::{Material, ObjectId, Point, Scene, SceneRef, SubScene};
+use vcx_demo::generate::{generate, SceneKind};
+
+type Cyl = (
+    Option<u32>,
+    Option<u32>,
+    Option<(u32, u8)>,
+    Option<(u32, u8)>,
+    Option<(usize, usize)>,
+    Option<(usize, usize)>,
+);
+/// A cylinder and its left and right neighbours.
+type Desc = (Cyl, Option<Cyl>, Option<Cyl>);
+
+/// The canonical description of a complex: cylinders by floor, ceiling, arcs and walls,
+/// with object ids mapped through `id`.
+fn describe(c: &Complex, id: impl Fn(ObjectId) -> u32) -> Vec<Desc> {
+    let wall = |w: Wall| match w {
+        Wall::Zero => None,
+        Wall::Vertex(v) => c.vertex(v).map(|v| (v.bitangent.first, v.bitangent.second)),
+    };
+    let chain = |ch: Option<vcx::line_space::Chain>| ch.map(|ch| (id(ch.object), ch.bound as u8));
+    let one = |cy: &vcx::partition::Cylinder| -> Cyl {
+        (
+            cy.floor.map(&id),
+            cy.ceiling.map(&id),
+            chain(cy.bottom),
+            chain(cy.top),
+            wall(cy.left),
+            wall(cy.right),
+        )
+    };
+    let nb = |n: Option<vcx::partition::CylinderId>| n.and_then(|n| c.cylinder(n)).map(one);
+    let mut out: Vec<Desc> = c
+        .cylinders()
+        .iter()
+        .map(|cy| (one(cy), nb(cy.left_neighbour), nb(cy.right_neighbour)))
+        .collect();
+    out.sort();
+    out
+}
+
+fn check_every_prefix(name: &str, scene: &SceneRef<'_>, seed: u64) {
+    let mut order: Vec<ObjectId> = (0..scene.len() as u32).map(ObjectId).collect();
+    // The construction's own shuffle is internal; any order must work, so use a simple one.
+    let len = order.len().max(1);
+    order.rotate_left((seed as usize) % len);
+    if seed % 2 == 1 {
+        order.reverse();
+    }
+    let mut h = History::new();
+    for (i, &n) in order.iter().enumerate() {
+        h.insert(scene, n)
+            .unwrap_or_else(|e| panic!("{name} seed {seed}: inserting {n:?} (#{i}): {e}"));
+        let got = h.complex(scene).unwrap();
+        let sub = SubScene::new(*scene, order[..=i].iter().copied());
+        let sref = sub.as_ref();
+        let want = build_by_sweep(&sref).unwrap();
+        let g = describe(&got, |o| o.0);
+        let w = describe(&want, |o| sub.original(o).unwrap().0);
+        if g != w {
+            let missing: Vec<_> = w.iter().filter(|d| !g.contains(d)).collect();
+            let extra: Vec<_> = g.iter().filter(|d| !w.contains(d)).collect();
+            panic!(
+                "{name} seed {seed} after inserting {n:?} (#{i} of {:?}):\n missing {missing:#?}\n extra {extra:#?}",
+                order
+            );
+        }
+        want.validate(&sref)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+fn pt(x: i32, y: i32) -> Point {
+    Point::from_raw(x << 16, y << 16).unwrap()
+}
+
+#[test]
+fn two_triangles() {
+    let polys = [
+        vec![pt(0, 0), pt(4, 0), pt(0, 3)],
+        vec![pt(10, 1), pt(14, 2), pt(11, 5)],
+    ];
+    let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+    for seed in 0..2 {
+        check_every_prefix("two triangles", &s.as_ref(), seed);
+    }
+}
+
+#[test]
+fn small_grids() {
+    for (n, seed) in [(4, 1), (9, 2), (16, 3)] {
+        let f = generate(SceneKind::Grid, n, seed).unwrap();
+        for order_seed in 0..4 {
+            check_every_prefix(&format!("grid {n}"), &f.scene.as_ref(), order_seed);
+        }
+    }
+}
+
+fn boxes(cells: &[(i32, i32)], size: i32, gap: i32) -> Vec<Vec<Point>> {
+    cells
+        .iter()
+        .map(|&(i, j)| {
+            let (x, y) = (i * (size + gap), j * (size + gap));
+            vec![
+                pt(x, y),
+                pt(x + size, y),
+                pt(x + size, y + size),
+                pt(x, y + size),
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn lattices_and_other_families() {
+    let cells: Vec<(i32, i32)> = (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).collect();
+    let polys = boxes(&cells, 2, 1);
+    let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+    for seed in 0..4 {
+        check_every_prefix("lattice 3x3", &s.as_ref(), seed);
+    }
+    for (kind, n, seed) in [
+        (SceneKind::Mixed, 12, 5),
+        (SceneKind::Hall, 5, 6),
+        (SceneKind::Grid, 36, 7),
+    ] {
+        let f = generate(kind, n, seed).unwrap();
+        for order_seed in 0..2 {
+            check_every_prefix(&format!("{kind:?} {n}"), &f.scene.as_ref(), order_seed);
+        }
+    }
+}
+
+#[test]
+fn seeded_builds_are_canonical() {
+    let f = generate(SceneKind::Grid, 49, 9).unwrap();
+    let s = f.scene.as_ref();
+    let want = describe(&build_by_sweep(&s).unwrap(), |o| o.0);
+    for seed in 0..20 {
+        let h = History::build(
+            &s,
+            &vcx::partition::BuildOptions {
+                seed,
+                first: vec![],
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            describe(&h.complex(&s).unwrap(), |o| o.0),
+            want,
+            "seed {seed}"
+        );
+        let st = h.stats();
+        println!("seed {seed}: {st:?}");
+    }
+}
+
+#[test]
+fn history_locate_agrees_with_the_complex() {
+    use vcx::geom::predicates::Direction;
+    use vcx::partition::Location;
+    use vcx::QueryPoint;
+    let mut state = 12345u64;
+    let mut rnd = |m: i64| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 33) as i64).rem_euclid(m)
+    };
+    let mut checked = 0;
+    for (kind, n, seed) in [
+        (SceneKind::Grid, 64, 1),
+        (SceneKind::Mixed, 20, 2),
+        (SceneKind::Hall, 8, 3),
+    ] {
+        let f = generate(kind, n, seed).unwrap();
+        let s = f.scene.as_ref();
+        let h = History::build(
+            &s,
+            &vcx::partition::BuildOptions {
+                seed,
+                first: vec![],
+            },
+        )
+        .unwrap();
+        let c = build_by_sweep(&s).unwrap();
+        let v = s.vertices();
+        for _ in 0..3000 {
+            let a = v[rnd(v.len() as i64) as usize];
+            let b = v[rnd(v.len() as i64) as usize];
+            let (q, d) = if rnd(2) == 0 && a != b {
+                let t = rnd(5) - 2;
+                (
+                    QueryPoint::from_raw(
+                        (a.x() as i64 + t * (b.x() as i64 - a.x() as i64)) << 16,
+                        (a.y() as i64 + t * (b.y() as i64 - a.y() as i64)) << 16,
+                    ),
+                    Direction::new(b.x() as i64 - a.x() as i64, b.y() as i64 - a.y() as i64),
+                )
+            } else {
+                (
+                    QueryPoint::from_raw((rnd(80 << 16)) << 16, (rnd(80 << 16)) << 16),
+                    Direction::new(rnd(2001) - 1000, rnd(2001) - 1000),
+                )
+            };
+            let (Some(q), Some(d)) = (q, d) else { continue };
+            match c.locate(&s, q, d) {
+                Some(Location::Free { cylinder }) => {
+                    let want = c.cylinder(cylinder).unwrap();
+                    let got = h
+                        .locate(&s, q, d)
+                        .unwrap_or_else(|| panic!("{kind:?}: no cylinder for {q:?} {d:?}"));
+                    assert_eq!(
+                        (got.floor, got.ceiling),
+                        (want.floor, want.ceiling),
+                        "{kind:?} {q:?} {d:?}"
+                    );
+                    checked += 1;
+                }
+                _ => {}
+            }
+        }
+        println!("{kind:?}: {:?}", h.stats());
+    }
+    assert!(checked > 5000);
+}
