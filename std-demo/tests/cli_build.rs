@@ -18,10 +18,10 @@ const STATS_KEYS: [&str; 10] = [
     "faces",
     "cylinders",
     "build_seconds",
+    "method",
     "history_nodes",
     "history_links",
     "history_depth",
-    "history",
 ];
 
 /// A fresh file in a per-process temporary directory.
@@ -74,17 +74,40 @@ fn fails(args: &[&str], expect: &[&str]) -> String {
     stderr
 }
 
-/// `vcx build --stats-json` on a file: every key, in order, and the parsed object.
+/// `vcx build --stats-json` on a file, by both methods: every key, in order; both give
+/// the same (canonical) complex; the parsed object of the randomized construction.
 fn stats(path: &Path) -> serde_json::Map<String, Value> {
     let line = one_line_ok(&["build", path.to_str().unwrap(), "--stats-json"]);
     let value: Value = serde_json::from_str(&line).unwrap();
     let object = value.as_object().unwrap().clone();
     let keys: Vec<&str> = object.keys().map(String::as_str).collect();
     assert_eq!(keys, STATS_KEYS, "{line}");
+    assert_eq!(object["method"], "ric");
     for key in ["history_nodes", "history_links", "history_depth"] {
-        assert!(object[key].is_null(), "{key}: {line}");
+        assert!(object[key].is_u64(), "{key}: {line}");
     }
-    assert!(object["history"].as_str().unwrap().starts_with("not built"));
+    assert!(
+        object["history_nodes"].as_u64() >= object["cylinders"].as_u64(),
+        "{line}"
+    );
+    let sweep = one_line_ok(&[
+        "build",
+        path.to_str().unwrap(),
+        "--stats-json",
+        "--method",
+        "sweep",
+    ]);
+    let sweep: Value = serde_json::from_str(&sweep).unwrap();
+    assert!(
+        sweep["history_nodes"].is_null()
+            && sweep["history"].as_str().unwrap().starts_with("not built")
+    );
+    for key in ["free_bitangents", "complex_vertices", "faces", "cylinders"] {
+        assert_eq!(
+            sweep[key], object[key],
+            "{key}: sweep and randomized construction differ"
+        );
+    }
     let seconds = object["build_seconds"].as_f64().unwrap();
     assert!(seconds.is_finite() && seconds >= 0.0, "{line}");
     object
@@ -131,7 +154,12 @@ fn summary_is_one_line() {
     let path = example("hall");
     let line = one_line_ok(&["build", path.to_str().unwrap()]);
     assert!(line.starts_with(path.to_str().unwrap()), "{line}");
-    for part in ["16 objects", "free bitangents", "cylinders", "no history"] {
+    for part in [
+        "16 objects",
+        "free bitangents",
+        "cylinders",
+        "randomized incremental, history",
+    ] {
         assert!(line.contains(part), "{part:?} not in {line}");
     }
 }

@@ -325,15 +325,16 @@ impl History {
     }
 
     /// Point location through the history: the live cylinder containing the ray from the
-    /// free point `q` in direction `d` (`q` must not be inside an object).
+    /// free point `q` in direction `d` (`q` must not be inside an object), as its history
+    /// node id and the cylinder.
     pub fn locate(
         &self,
         scene: &SceneRef<'_>,
         q: QueryPoint,
         d: crate::geom::predicates::Direction,
-    ) -> Option<&Cylinder> {
+    ) -> Option<(CylinderId, &Cylinder)> {
         let id = self.locate_probe(scene, &Angle::constant(d), Probe::Query(q))?;
-        self.cylinders.get(id.index())
+        Some((id, self.cylinders.get(id.index())?))
     }
 
     /// The live cylinder across `chain` on `side` in `layer` at θ⁺.
@@ -407,12 +408,13 @@ impl History {
         ins.chain = self
             .chain_up(scene, n, i0, &zero, None)
             .ok_or(lost("chain at 0"))?;
-        for shape in derive(&self.cylinders, &ins.chain, n) {
+        let shapes = derive(&self.cylinders, &ins.chain, n);
+        for &shape in &shapes {
             let id = self.push(Cylinder::new(shape, Wall::Zero))?;
             ins.open.insert(shape, id);
             ins.created.push(id);
         }
-        ins.record_children(self);
+        ins.record_children(self, &shapes);
         let mut theta: Option<Angle> = None;
 
         for _ in 0..4 * self.cylinders.len() + 16 {
@@ -569,7 +571,8 @@ impl History {
         chain: Vec<CylinderId>,
         wall: Wall,
     ) -> Result<(), ComplexError> {
-        let shapes: BTreeSet<Shape> = derive(&self.cylinders, &chain, ins.n).into_iter().collect();
+        let derived = derive(&self.cylinders, &chain, ins.n);
+        let shapes: BTreeSet<Shape> = derived.iter().copied().collect();
         let mut closers: Vec<CylinderId> = Vec::new();
         let mut openers: Vec<CylinderId> = Vec::new();
         // Replacement intervals that changed.
@@ -651,7 +654,7 @@ impl History {
             }
         }
         ins.chain = chain;
-        ins.record_children(self);
+        ins.record_children(self, &derived);
         Ok(())
     }
 
@@ -674,7 +677,7 @@ impl History {
             self.cylinders[id.index()].right_neighbour = Some(first);
             self.cylinders[first.index()].left_neighbour = Some(id);
         }
-        let destroyed: BTreeSet<CylinderId> = ins.destroyed.iter().copied().collect();
+        let destroyed = core::mem::take(&mut ins.destroyed);
         // The first piece of an old cylinder continues from its old left neighbour (or from
         // that neighbour's last piece); the last piece leads to the old right neighbour.
         for (&d, &p) in &ins.first_piece {
@@ -747,7 +750,7 @@ struct Insertion {
     /// Every cylinder created by this insertion.
     created: Vec<CylinderId>,
     /// Every conflict cylinder seen.
-    destroyed: Vec<CylinderId>,
+    destroyed: BTreeSet<CylinderId>,
     /// Pieces of old cylinders outside the conflict region: the one before the cylinder
     /// first entered the chain, the open one after it left, and the last one.
     first_piece: BTreeMap<CylinderId, CylinderId>,
@@ -763,17 +766,14 @@ impl Default for ObjectId {
 
 impl Insertion {
     /// Links every chain cylinder to the replacement intervals covering it now.
-    fn record_children(&mut self, h: &mut History) {
-        let shapes = derive(&h.cylinders, &self.chain, self.n);
+    fn record_children(&mut self, h: &mut History, shapes: &[Shape]) {
         let k = self.chain.len();
         for (j, &d) in self.chain.iter().enumerate() {
-            if !self.destroyed.contains(&d) {
-                self.destroyed.push(d);
-            }
+            self.destroyed.insert(d);
             let f = h.cylinders[d.index()].floor;
             let g = h.cylinders[d.index()].ceiling;
             let n = Some(self.n);
-            for s in &shapes {
+            for s in shapes {
                 // I₀ below N, I_k above N, and the (F, N) and (N, G) runs through j.
                 let covers = (j == 0
                     && s.3

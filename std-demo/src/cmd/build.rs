@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::{json, Value};
-use vcx::partition::{build_by_sweep, Complex};
+use vcx::partition::{build_by_sweep, BuildOptions, Complex, History};
 use vcx::SceneRef;
 
 use super::{write_stdout, Failure};
@@ -36,7 +36,16 @@ pub const EXIT_INTERNAL: u8 = 3;
 
 /// Why the history fields of `--stats-json` are `null`.
 pub const HISTORY_NOT_BUILT: &str = "not built: the rotational sweep builds the canonical \
-     partition without history; the randomized incremental construction will fill these";
+     partition without history (use --method ric)";
+
+/// How to build the complex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Randomized incremental construction with history (§4 of the paper).
+    Ric,
+    /// Rotational sweep: the canonical partition without history.
+    Sweep,
+}
 
 /// Arguments of `vcx build`.
 #[derive(Debug, clap::Args)]
@@ -46,35 +55,82 @@ pub struct Args {
     /// Print the statistics as one JSON object instead of a summary line.
     #[arg(long)]
     pub stats_json: bool,
+    /// Seed of the random insertion order (same seed, same history).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Insert the screens first, then the other objects in random order (§7).
+    #[arg(long)]
+    pub screens_first: bool,
+    /// Construction method.
+    #[arg(long, value_enum, default_value_t = Method::Ric)]
+    pub method: Method,
 }
 
 /// A built complex and how long building it took.
 pub struct Built {
     /// The complex (validated).
     pub complex: Complex,
-    /// Wall time of `build_by_sweep` alone, in seconds.
+    /// The construction history (randomized incremental construction only).
+    pub history: Option<History>,
+    /// Wall time of the construction alone, in seconds.
     pub seconds: f64,
 }
 
 /// Builds the complex of a validated scene and checks it; any failure is internal
 /// (exit status 3) and names the scene file.
 pub fn build_checked(path: &Path, scene: &SceneRef<'_>) -> Result<Built, Failure> {
+    build_with(path, scene, Method::Sweep, &BuildOptions::default())
+}
+
+/// Builds with the given method and validates the result.
+pub fn build_with(
+    path: &Path,
+    scene: &SceneRef<'_>,
+    method: Method,
+    options: &BuildOptions,
+) -> Result<Built, Failure> {
     let internal = |e: vcx::partition::ComplexError| Failure {
         message: format!("{}: internal: {e}", path.display()),
         code: EXIT_INTERNAL,
     };
     let start = Instant::now();
-    let complex = build_by_sweep(scene).map_err(internal)?;
-    let seconds = start.elapsed().as_secs_f64();
+    let (complex, history, seconds) = match method {
+        Method::Sweep => {
+            let c = build_by_sweep(scene).map_err(internal)?;
+            (c, None, start.elapsed().as_secs_f64())
+        }
+        Method::Ric => {
+            let h = History::build(scene, options).map_err(internal)?;
+            let seconds = start.elapsed().as_secs_f64();
+            (h.complex(scene).map_err(internal)?, Some(h), seconds)
+        }
+    };
     complex.validate(scene).map_err(internal)?;
-    Ok(Built { complex, seconds })
+    Ok(Built {
+        complex,
+        history,
+        seconds,
+    })
 }
 
 /// Loads the scene, builds and validates the complex, prints the statistics.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let file = super::check::load(&args.scene)?;
     let scene = file.scene.as_ref();
-    let built = build_checked(&args.scene, &scene)?;
+    let first = if args.screens_first {
+        let screens = scene.objects().iter().enumerate();
+        screens
+            .filter(|(_, o)| o.material == vcx::Material::Screen)
+            .map(|(i, _)| vcx::ObjectId(i as u32))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let options = BuildOptions {
+        seed: args.seed,
+        first,
+    };
+    let built = build_with(&args.scene, &scene, args.method, &options)?;
     let text = if args.stats_json {
         let mut line = stats_json(scene.len(), &built).to_string();
         line.push('\n');
@@ -88,18 +144,31 @@ pub fn run(args: &Args) -> Result<(), Failure> {
 /// The `--stats-json` object.
 pub fn stats_json(objects: usize, built: &Built) -> Value {
     let c = &built.complex;
-    json!({
+    let mut v = json!({
         "objects": objects,
         "free_bitangents": c.free_bitangents(),
         "complex_vertices": c.vertices().len(),
         "faces": c.faces(),
         "cylinders": c.cylinders().len(),
         "build_seconds": built.seconds,
-        "history_nodes": null,
-        "history_links": null,
-        "history_depth": null,
-        "history": HISTORY_NOT_BUILT,
-    })
+    });
+    match &built.history {
+        Some(h) => {
+            let st = h.stats();
+            v["method"] = json!("ric");
+            v["history_nodes"] = json!(st.nodes);
+            v["history_links"] = json!(st.links);
+            v["history_depth"] = json!(st.depth);
+        }
+        None => {
+            v["method"] = json!("sweep");
+            v["history_nodes"] = Value::Null;
+            v["history_links"] = Value::Null;
+            v["history_depth"] = Value::Null;
+            v["history"] = json!(HISTORY_NOT_BUILT);
+        }
+    }
+    v
 }
 
 /// The one-line summary for people.
@@ -107,12 +176,22 @@ pub fn summary(path: &Path, objects: usize, built: &Built) -> String {
     let c = &built.complex;
     super::one_line(&format!(
         "{}: {objects} objects, {} free bitangents ({} complex vertices), {} faces, \
-         {} cylinders; built in {:.3} s (rotational sweep, no history)",
+         {} cylinders; built in {:.3} s ({})",
         path.display(),
         c.free_bitangents(),
         c.vertices().len(),
         c.faces(),
         c.cylinders().len(),
         built.seconds,
+        match &built.history {
+            Some(h) => {
+                let st = h.stats();
+                format!(
+                    "randomized incremental, history {} nodes, {} links, depth {}",
+                    st.nodes, st.links, st.depth
+                )
+            }
+            None => "rotational sweep, no history".to_string(),
+        }
     ))
 }

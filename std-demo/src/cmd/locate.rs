@@ -1,8 +1,9 @@
 //! `vcx locate SCENE.json --at X,Y --dir DX,DY [--json]`: what a ray sees ahead and behind.
 //!
-//! Builds the complex (as `vcx build` does, validated; a failure is internal, exit status 3)
-//! and locates the ray from `(X, Y)` in direction `(DX, DY)`: the cylinder of the complex
-//! that contains it. Its ceiling is the first object the ray hits (**forward**), its floor
+//! Builds the complex by randomized incremental construction (as `vcx build` does, seed 0,
+//! validated; a failure is internal, exit status 3) and locates the ray from `(X, Y)` in
+//! direction `(DX, DY)` through the construction history (the paper's §4.2): the live
+//! cylinder that contains it, reported by its history node id. Its ceiling is the first object the ray hits (**forward**), its floor
 //! the first object hit looking the opposite way (**backward**); `null` / "nothing" means
 //! the ray escapes to infinity. Object ids are indices in the scene file's `objects`.
 //!
@@ -36,8 +37,9 @@ use vcx::partition::{point_in_scene, Location};
 use vcx::{ObjectId, QueryPoint};
 use vcx_demo::SceneFile;
 
-use super::build::{build_checked, EXIT_INTERNAL};
+use super::build::{build_with, Method, EXIT_INTERNAL};
 use super::{write_stdout, Failure};
+use vcx::partition::BuildOptions;
 
 /// Arguments of `vcx locate`.
 #[derive(Debug, clap::Args)]
@@ -61,7 +63,7 @@ const MAX_ABS_AT: f64 = (QUERY_MAX_ABS_RAW >> QUERY_FRAC_BITS) as f64;
 /// Parses the arguments, builds the complex, locates the ray and prints the answer.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let (x, y) = parse_pair("--at", &args.at)?;
-    let q = query_point(&args.at, x, y)?;
+    let q = query_point("--at", &args.at, x, y)?;
     let (dx, dy) = parse_pair("--dir", &args.dir)?;
     let (d, exact) = direction_from_f64(dx, dy)
         .map_err(|e| Failure::bad_input(format!("--dir {:?}: {}", args.dir, e.message(dx, dy))))?;
@@ -73,20 +75,22 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     if let Some(l) = point_in_scene(&scene, q) {
         return Err(in_object(&args.scene, &at, &file, l));
     }
-    let built = build_checked(&args.scene, &scene)?;
-    let complex = &built.complex;
+    let built = build_with(&args.scene, &scene, Method::Ric, &BuildOptions::default())?;
     let internal = |what: &str| Failure {
         message: format!("{}: internal: {what}", args.scene.display()),
         code: EXIT_INTERNAL,
     };
-    let cylinder = match complex.locate(&scene, q, d) {
-        Some(Location::Free { cylinder }) => cylinder,
-        Some(l) => return Err(in_object(&args.scene, &at, &file, l)),
-        None => return Err(internal(&format!("no cylinder contains the ray from {at}"))),
-    };
-    let c = complex
-        .cylinder(cylinder)
-        .ok_or_else(|| internal("located cylinder id out of range"))?;
+    if let Some(l) = vcx::partition::point_in_scene(&scene, q) {
+        return Err(in_object(&args.scene, &at, &file, l));
+    }
+    let history = built
+        .history
+        .as_ref()
+        .ok_or_else(|| internal("no history"))?;
+    // Point location through the history of the randomized construction (§4.2).
+    let (cylinder, c) = history
+        .locate(&scene, q, d)
+        .ok_or_else(|| internal(&format!("no cylinder contains the ray from {at}")))?;
     let (forward, backward) = (c.ceiling, c.floor);
     let text = if args.json {
         let id = |o: Option<ObjectId>| o.map_or(Value::Null, |o| json!(o.0));
@@ -118,7 +122,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
 }
 
 /// A number for people: as written by Rust, or in scientific notation if that is long.
-fn number(v: f64) -> String {
+pub(crate) fn number(v: f64) -> String {
     let plain = v.to_string();
     if plain.len() > 20 {
         format!("{v:e}")
@@ -128,7 +132,7 @@ fn number(v: f64) -> String {
 }
 
 /// `object 3` or `object 3 "name"`, or `nothing` for infinity.
-fn describe(file: &SceneFile, object: Option<ObjectId>) -> String {
+pub(crate) fn describe(file: &SceneFile, object: Option<ObjectId>) -> String {
     match object {
         None => "nothing".to_string(),
         Some(o) => match file.meta.get(o.0 as usize).and_then(|m| m.name()) {
@@ -139,7 +143,12 @@ fn describe(file: &SceneFile, object: Option<ObjectId>) -> String {
 }
 
 /// The failure for a point inside or on an object.
-fn in_object(path: &std::path::Path, at: &str, file: &SceneFile, l: Location) -> Failure {
+pub(crate) fn in_object(
+    path: &std::path::Path,
+    at: &str,
+    file: &SceneFile,
+    l: Location,
+) -> Failure {
     let what = match l {
         Location::Inside { object } => format!("is inside {}", describe(file, Some(object))),
         Location::OnBoundary { object } => {
@@ -151,7 +160,7 @@ fn in_object(path: &std::path::Path, at: &str, file: &SceneFile, l: Location) ->
 }
 
 /// Parses `A,B` into two finite `f64`s; the failure names the option.
-fn parse_pair(option: &str, text: &str) -> Result<(f64, f64), Failure> {
+pub(crate) fn parse_pair(option: &str, text: &str) -> Result<(f64, f64), Failure> {
     let bad = |why: String| Failure::bad_input(format!("{option} {text:?}: {why}"));
     let mut parts = text.split(',');
     let (Some(a), Some(b), None) = (parts.next(), parts.next(), parts.next()) else {
@@ -173,17 +182,18 @@ fn parse_pair(option: &str, text: &str) -> Result<(f64, f64), Failure> {
     Ok((number(a)?, number(b)?))
 }
 
-/// The query point of `--at`, or a failure naming the coordinate out of range.
-fn query_point(text: &str, x: f64, y: f64) -> Result<QueryPoint, Failure> {
+/// The query point of `--at` (or of another `option` label), or a failure naming the
+/// coordinate out of range.
+pub(crate) fn query_point(option: &str, text: &str, x: f64, y: f64) -> Result<QueryPoint, Failure> {
     for (name, v) in [("X", x), ("Y", y)] {
         if QueryPoint::from_f64(v, 0.0).is_err() {
             return Err(Failure::bad_input(format!(
-                "--at {text:?}: {name} = {v} is out of range (|{name}| <= {MAX_ABS_AT})"
+                "{option} {text:?}: {name} = {v} is out of range (|{name}| <= {MAX_ABS_AT})"
             )));
         }
     }
     QueryPoint::from_f64(x, y)
-        .map_err(|_| Failure::bad_input(format!("--at {text:?}: out of range")))
+        .map_err(|_| Failure::bad_input(format!("{option} {text:?}: out of range")))
 }
 
 /// Why `--dir` has no direction.
