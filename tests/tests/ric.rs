@@ -212,7 +212,7 @@ fn history_locate_agrees_with_the_complex() {
             match c.locate(&s, q, d) {
                 Some(Location::Free { cylinder }) => {
                     let want = c.cylinder(cylinder).unwrap();
-                    let got = h
+                    let (_, got) = h
                         .locate(&s, q, d)
                         .unwrap_or_else(|| panic!("{kind:?}: no cylinder for {q:?} {d:?}"));
                     assert_eq!(
