@@ -25,6 +25,6 @@ pub mod scene;
 pub mod walk;
 
 pub use geom::{Point, QueryPoint, Sign};
+pub use scene::{Eta, Material, Object, ObjectId, SceneError, SceneRef};
 #[cfg(feature = "alloc")]
 pub use scene::{Scene, SubScene};
-pub use scene::{Eta, Material, Object, ObjectId, SceneError, SceneRef};

@@ -325,12 +325,19 @@ impl<'a> SubScene<'a> {
                 kept.push(id);
             }
         }
-        SubScene { vertices: scene.vertices, objects, ids: kept }
+        SubScene {
+            vertices: scene.vertices,
+            objects,
+            ids: kept,
+        }
     }
 
     /// The validated view of the subset.
     pub fn as_ref(&self) -> SceneRef<'_> {
-        SceneRef { vertices: self.vertices, objects: &self.objects }
+        SceneRef {
+            vertices: self.vertices,
+            objects: &self.objects,
+        }
     }
 
     /// The id in the whole scene of the subset's object `id`.
