@@ -23,7 +23,10 @@ static SQUARE: [Point; 4] = [pt(10, 10), pt(14, 10), pt(14, 14), pt(10, 14)];
 
 #[entry]
 fn main() -> ! {
-    let objects = [(Material::Opaque, &TRIANGLE[..]), (Material::Mirror, &SQUARE[..])];
+    let objects = [
+        (Material::Opaque, &TRIANGLE[..]),
+        (Material::Mirror, &SQUARE[..]),
+    ];
     let scene = FixedScene::<16, 4>::new(black_box(objects));
     let mut checksum = 0i32;
     if let Ok(scene) = &scene {
