@@ -454,3 +454,32 @@ mod views {
         assert!(checked > scale_views(90) * 3, "{checked}");
     }
 }
+
+/// Crossing a chain from a cylinder (`across_from`, which scans from a precomputed start)
+/// finds the same cylinder as the search over the whole chain (`across`).
+#[test]
+fn across_from_a_cylinder_agrees_with_the_chain_search() {
+    use vcx::partition::{Layer, Side};
+    let mut checked = 0;
+    for (kind, n, seed) in [(SceneKind::Grid, 25, 1), (SceneKind::Mixed, 15, 2), (SceneKind::Hall, 6, 3)] {
+        let f = generate(kind, n, seed).unwrap();
+        let s = f.scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        for a in sample_directions().iter().take(60) {
+            for (id, cyl) in c.cylinders_at(&s, a) {
+                for (chain, side) in [(cyl.bottom, Side::Below), (cyl.top, Side::Above)] {
+                    let Some(chain) = chain else { continue };
+                    for layer in [Layer::Around, Layer::Before, Layer::After] {
+                        let want = c.across(&s, chain, side, layer, a);
+                        let got = c.across_from(&s, id, side, layer, a);
+                        if want.is_some() {
+                            assert_eq!(got, want, "{kind:?} cylinder {id:?} {side:?} {layer:?}");
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 1000, "{checked}");
+}

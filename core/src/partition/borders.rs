@@ -3,7 +3,6 @@
 //! a lower chain (and above an upper chain) lies one layer, the one in which the chain's
 //! object is not crossed; on the other side lie two, before and after the object in t.
 
-use alloc::collections::BTreeMap;
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
@@ -44,46 +43,161 @@ impl Layer {
     }
 }
 
-/// The bordering cylinders of every chain, side and layer, sorted by θ.
-pub(crate) type Borders = BTreeMap<(Chain, Side, Layer), Vec<CylinderId>>;
+/// Derived lookup state of a complex, rebuilt from its cylinders and vertices (never
+/// trusted from a file): the angle of every vertex, and for every chain, side and layer the
+/// bordering cylinders sorted by θ, addressed by an index (no map on the walk's hot path).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Borders {
+    /// θ of every vertex, in vertex order.
+    pub(crate) angles: Vec<Angle>,
+    /// `tilings[slot(chain, side, layer)]`: cylinders sorted by θ.
+    tilings: Vec<Vec<CylinderId>>,
+    /// For every cylinder, its bottom (`[0]`) and top (`[1]`) arc, and each of the (at most
+    /// two) layers on the far side of that arc: the index, in the far side's tiling, of the
+    /// cylinder containing this cylinder's left wall. A walk leaving the cylinder across
+    /// the arc scans forward from there.
+    start: Vec<[[u32; 2]; 2]>,
+}
+
+/// Index of a (chain, side, layer) tiling: 12 slots per object.
+fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
+    let bound = match chain.bound {
+        crate::line_space::Bound::Lower => 0,
+        crate::line_space::Bound::Upper => 1,
+    };
+    let side = match side {
+        Side::Below => 0,
+        Side::Above => 1,
+    };
+    let layer = match layer {
+        Layer::Around => 0,
+        Layer::Before => 1,
+        Layer::After => 2,
+    };
+    ((chain.object.0 as usize * 2 + bound) * 2 + side) * 3 + layer
+}
 
 pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
-    let mut out: Borders = BTreeMap::new();
+    let angles: Vec<Angle> = complex
+        .vertices
+        .iter()
+        .map(|v| v.bitangent.angle(scene))
+        .collect();
+    let mut tilings: Vec<Vec<CylinderId>> = alloc::vec![Vec::new(); 12 * scene.len()];
     for (i, c) in complex.cylinders.iter().enumerate() {
         let id = CylinderId(i as u32);
-        if let Some(t) = c.top {
-            out.entry((t, Side::Below, Layer::of(c, t)))
-                .or_default()
-                .push(id);
-        }
-        if let Some(b) = c.bottom {
-            out.entry((b, Side::Above, Layer::of(c, b)))
-                .or_default()
-                .push(id);
+        for (chain, side) in [(c.top, Side::Below), (c.bottom, Side::Above)] {
+            if let Some(t) = chain.and_then(|ch| tilings.get_mut(slot(ch, side, Layer::of(c, ch))))
+            {
+                t.push(id);
+            }
         }
     }
-    for list in out.values_mut() {
-        let mut keyed: Vec<(Option<Angle>, CylinderId)> = list
-            .iter()
-            .map(|&id| (complex.left_angle(scene, id), id))
-            .collect();
-        keyed.sort_by(|a, b| match (&a.0, &b.0) {
+    let left = |id: &CylinderId| match complex.cylinders.get(id.index()).map(|c| c.left) {
+        Some(Wall::Vertex(v)) => angles.get(v.index()),
+        _ => None,
+    };
+    for list in &mut tilings {
+        list.sort_by(|a, b| match (left(a), left(b)) {
             (None, None) => Ordering::Equal,
             (None, Some(_)) => Ordering::Less,
             (Some(_), None) => Ordering::Greater,
             (Some(x), Some(y)) => x.cmp_angle(y),
         });
-        *list = keyed.into_iter().map(|(_, id)| id).collect();
+    }
+    let mut b = Borders {
+        angles,
+        tilings,
+        start: Vec::new(),
+    };
+    let mut start = alloc::vec![[[0u32; 2]; 2]; complex.cylinders.len()];
+    for (i, c) in complex.cylinders.iter().enumerate() {
+        let left = complex_left(&b, c);
+        for (arc, chain, side) in [(0, c.bottom, Side::Below), (1, c.top, Side::Above)] {
+            let Some(chain) = chain else { continue };
+            for (l, layer) in far_layers(chain, side).into_iter().enumerate() {
+                let list = b
+                    .tilings
+                    .get(slot(chain, side, layer))
+                    .map(Vec::as_slice)
+                    .unwrap_or(&[]);
+                // The last far cylinder whose left wall is at or before this one's.
+                let k = list.partition_point(|id| {
+                    complex.cylinders.get(id.index()).is_some_and(|f| {
+                        match (complex_left(&b, f), &left) {
+                            (None, _) => true,
+                            (Some(_), None) => false,
+                            (Some(x), Some(y)) => x.cmp_angle(y) != Ordering::Greater,
+                        }
+                    })
+                });
+                start[i][arc][l] = k.saturating_sub(1) as u32;
+            }
+        }
+    }
+    b.start = start;
+    b
+}
+
+/// The left wall angle of a cylinder from the cache (`None`: θ = 0).
+fn complex_left(b: &Borders, c: &super::Cylinder) -> Option<Angle> {
+    match c.left {
+        Wall::Zero => None,
+        Wall::Vertex(v) => b.angles.get(v.index()).copied(),
+    }
+}
+
+/// The layers on side `side` of `chain`: two (before and after the object) where the
+/// object is crossed, one otherwise.
+fn far_layers(chain: Chain, side: Side) -> heapless::Vec<Layer, 2> {
+    let crossed = match chain.bound {
+        crate::line_space::Bound::Lower => Side::Above,
+        crate::line_space::Bound::Upper => Side::Below,
+    };
+    let mut out = heapless::Vec::new();
+    if side == crossed {
+        let _ = out.push(Layer::Before);
+        let _ = out.push(Layer::After);
+    } else {
+        let _ = out.push(Layer::Around);
     }
     out
 }
 
 impl Complex {
-    /// The angle of the cylinder's left wall; `None` for θ = 0.
-    pub(crate) fn left_angle(&self, scene: &SceneRef<'_>, id: CylinderId) -> Option<Angle> {
-        self.cylinders
-            .get(id.index())
-            .and_then(|c| self.wall_angle(scene, c.left))
+    /// Leaving cylinder `from` across its bottom (`side` = `Below`) or top (`Above`) arc at
+    /// `angle` (within `from`'s θ-range), the cylinder entered in `layer`. Looks near the
+    /// position of `from` along the chain instead of searching the whole chain: the
+    /// cylinders on both sides of a chain are sorted by θ, and the one entered overlaps
+    /// `from`, so the scan is short.
+    pub fn across_from(
+        &self,
+        scene: &SceneRef<'_>,
+        from: CylinderId,
+        side: Side,
+        layer: Layer,
+        angle: &Angle,
+    ) -> Option<CylinderId> {
+        let c = self.cylinders.get(from.index())?;
+        let (chain, arc) = match side {
+            Side::Below => (c.bottom?, 0),
+            Side::Above => (c.top?, 1),
+        };
+        let l = far_layers(chain, side).iter().position(|&x| x == layer)?;
+        let list = self.borders.tilings.get(slot(chain, side, layer))?;
+        let first = *self.borders.start.get(from.index())?.get(arc)?.get(l)? as usize;
+        // The far cylinders overlapping `from` follow each other from `first`.
+        for id in list.iter().skip(first) {
+            let f = self.cylinders.get(id.index())?;
+            let before_right = match f.right {
+                Wall::Zero => true,
+                w => angle.cmp_angle(&self.wall_angle(scene, w)?) == Ordering::Less,
+            };
+            if before_right {
+                return Some(*id);
+            }
+        }
+        None
     }
 
     /// The cylinder bordering `chain` on `side` in `layer` whose θ-range contains `angle`.
@@ -95,18 +209,27 @@ impl Complex {
         layer: Layer,
         angle: &Angle,
     ) -> Option<CylinderId> {
-        let list = self.borders.get(&(chain, side, layer))?;
+        let list = self.borders.tilings.get(slot(chain, side, layer))?;
+        let before = |w: Wall| match w {
+            Wall::Zero => true,
+            Wall::Vertex(_) => self
+                .wall_angle(scene, w)
+                .is_some_and(|l| l.cmp_angle(angle) == Ordering::Less),
+        };
         // The last cylinder whose left wall lies before `angle` (θ = 0 lies before all).
         let k = list.partition_point(|&id| {
-            self.left_angle(scene, id)
-                .is_none_or(|l| l.cmp_angle(angle) == Ordering::Less)
+            self.cylinders
+                .get(id.index())
+                .is_some_and(|c| before(c.left))
         });
         let id = *list.get(k.checked_sub(1)?)?;
         let c = self.cylinders.get(id.index())?;
-        matches!(c.right, Wall::Zero).then_some(id).or_else(|| {
-            self.wall_angle(scene, c.right)
-                .filter(|r| angle.cmp_angle(r) == Ordering::Less)
-                .map(|_| id)
-        })
+        let inside = match c.right {
+            Wall::Zero => true,
+            w => self
+                .wall_angle(scene, w)
+                .is_some_and(|r| angle.cmp_angle(&r) == Ordering::Less),
+        };
+        inside.then_some(id)
     }
 }

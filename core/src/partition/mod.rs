@@ -147,7 +147,10 @@ impl Complex {
     ) -> Option<crate::geom::sos::Angle> {
         match wall {
             Wall::Zero => None,
-            Wall::Vertex(v) => self.vertex(v).map(|v| v.bitangent.angle(scene)),
+            Wall::Vertex(v) => match self.borders.angles.get(v.index()) {
+                Some(a) => Some(*a),
+                None => self.vertex(v).map(|v| v.bitangent.angle(scene)),
+            },
         }
     }
 

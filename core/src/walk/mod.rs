@@ -158,7 +158,7 @@ impl Complex {
                     } else {
                         Layer::After
                     };
-                    self.across(scene, chain, side, layer, &theta)
+                    self.across_from(scene, cur, side, layer, &theta)
                         .ok_or(WalkError::Corrupt)?
                 }
             };
