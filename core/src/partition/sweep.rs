@@ -15,7 +15,7 @@ use core::ops::Bound as RangeBound;
 
 use super::{Complex, Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::geom::sos::Angle;
-use crate::line_space::{cross_section, free_bitangents, Bitangent, Bound, Chain};
+use crate::line_space::{bitangents, cross_section, is_free, Bitangent, Bound, Chain};
 use crate::partition::ComplexError;
 use crate::scene::{ObjectId, SceneRef};
 
@@ -62,15 +62,22 @@ impl Corner {
 }
 
 /// All directed free bitangents of the scene, sorted by θ.
-///
-/// Found by the kinetic sweep of [`free_bitangents`](crate::line_space::free_bitangents) (output-sensitive; it falls back to
-/// the O(n³) brute force if an invariant of the partition fails), already in θ order: the
-/// stable sort below then costs one comparison per vertex and keeps the order defined
-/// here whatever the enumeration.
 fn free_vertices(scene: &SceneRef<'_>) -> Vec<Vertex> {
-    let mut keyed: Vec<(Angle, Vertex)> = free_bitangents(scene)
+    let n = scene.len();
+    let mut out = Vec::new();
+    for a in 0..n {
+        for b in a + 1..n {
+            let (a, b) = (ObjectId(a as u32), ObjectId(b as u32));
+            out.extend(
+                bitangents(*scene, a, b)
+                    .filter(|t| is_free(scene, t))
+                    .map(|bitangent| Vertex { bitangent }),
+            );
+        }
+    }
+    let mut keyed: Vec<(Angle, Vertex)> = out
         .into_iter()
-        .map(|bitangent| (bitangent.angle(scene), Vertex { bitangent }))
+        .map(|v| (v.bitangent.angle(scene), v))
         .collect();
     keyed.sort_by(|a, b| a.0.cmp_angle(&b.0));
     keyed.into_iter().map(|(_, v)| v).collect()
