@@ -134,7 +134,7 @@ fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
     // single variable k, then the pairs (j, k) for j < k (binary counting order).
     let single = |k: usize| -> i128 {
         let p = vars[k / 2];
-        if k % 2 == 0 {
+        if k.is_multiple_of(2) {
             p.su * vy - p.sv * uy // ∂F/∂εx
         } else {
             p.sv * ux - p.su * vx // ∂F/∂εy
