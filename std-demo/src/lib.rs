@@ -10,6 +10,7 @@
 //! The binary (`src/main.rs`, one module per subcommand under `src/cmd/`) only parses
 //! arguments, calls these, and turns errors into one line on stderr.
 
+pub mod demo;
 pub mod generate;
 pub mod scene_file;
 

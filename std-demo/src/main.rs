@@ -1,5 +1,5 @@
 //! `vcx`: the command line of vcx — check and generate scenes, build the complex and
-//! locate rays in it (later: view, render, bench, demo).
+//! locate rays in it, views from points (later: render, bench, demo).
 //!
 //! Errors are one line on stderr, `error: ` first, and exit status 2. A complex that
 //! cannot be built or fails its own checks is a bug: one line and exit status 3. A panic
@@ -29,6 +29,13 @@ enum Command {
     Build(cmd::build::Args),
     /// Locate a ray: the objects it sees ahead and behind, and its cylinder.
     Locate(cmd::locate::Args),
+    /// The view from a point: the exact angular intervals of what it sees all around.
+    View(cmd::view::Args),
+    /// Walk a scene in the terminal: the view, the map and the complex in dual space.
+    Demo(cmd::demo::Args),
+    /// Measure construction and walking (see BENCHMARKS.md).
+    #[command(subcommand)]
+    Bench(cmd::bench::Bench),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +46,9 @@ fn main() -> ExitCode {
         Command::Gen(args) => cmd::gen::run(&args),
         Command::Build(args) => cmd::build::run(&args),
         Command::Locate(args) => cmd::locate::run(&args),
+        Command::Demo(args) => cmd::demo::run(&args),
+        Command::View(args) => cmd::view::run(&args),
+        Command::Bench(bench) => cmd::bench::run(&bench),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,9 +1,12 @@
 //! One module per subcommand. Each `run` returns `Result<(), Failure>`; `main` reports.
 
+pub mod bench;
 pub mod build;
 pub mod check;
+pub mod demo;
 pub mod gen;
 pub mod locate;
+pub mod view;
 
 use std::io::Write;
 use std::process::ExitCode;
