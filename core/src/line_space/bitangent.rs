@@ -90,6 +90,62 @@ pub fn bitangents<'a>(
         })
 }
 
+/// The one directed bitangent that runs from object `p.object`, tangent on chain `p`, to
+/// object `q.object`, tangent on chain `q` (free or not), as its tangent vertices (global
+/// indices). `None` for two chains of one object.
+///
+/// For two disjoint convex objects each of the 8 directed bitangents has a different
+/// (first object, first bound, second bound) — the 4 lines give the 4 bound pairs in one
+/// orientation — so this is the bitangent [`bitangents`] lists with these chains, decided
+/// by the same tests as [`tangency`] (inlined here, with each vertex's neighbours looked
+/// up once: this is the inner loop of the kinetic sweep).
+///
+/// Cost: at most `|P|·|Q|` vertex pairs, one or two orientation tests each, two more for
+/// the pairs tangent to P.
+#[cfg(feature = "alloc")]
+pub(crate) fn chain_bitangent(
+    scene: &SceneRef<'_>,
+    p: super::Chain,
+    q: super::Chain,
+) -> Option<(usize, usize)> {
+    if p.object == q.object {
+        return None;
+    }
+    let (op, oq) = (scene.object(p.object)?, scene.object(q.object)?);
+    use crate::geom::{sos::RankedPoint, Point};
+    let (pv, qv) = (scene.polygon(op), scene.polygon(oq));
+    let (fp, fq) = (op.first_vertex(), oq.first_vertex());
+    // `tangency(a, b)` is `Lower` iff both neighbours of `a` are left of `a → b`.
+    let sign = |b: Bound| match b {
+        Bound::Lower => Sign::Positive,
+        Bound::Upper => Sign::Negative,
+    };
+    let (want_p, want_q) = (sign(p.bound), sign(flip(q.bound)));
+    // Vertex k of a polygon (cyclically) with its rank.
+    let at = |v: &[Point], first: usize, k: usize| {
+        let k = k % v.len().max(1);
+        v.get(k).map(|&pt| RankedPoint::vertex(pt, first + k))
+    };
+    for a in 0..pv.len() {
+        let (pa, pprev, pnext) = (
+            at(pv, fp, a)?,
+            at(pv, fp, a + pv.len() - 1)?,
+            at(pv, fp, a + 1)?,
+        );
+        for b in 0..qv.len() {
+            let qb = at(qv, fq, b)?;
+            if sos::orient(pa, qb, pprev) != want_p || sos::orient(pa, qb, pnext) != want_p {
+                continue;
+            }
+            let (qprev, qnext) = (at(qv, fq, b + qv.len() - 1)?, at(qv, fq, b + 1)?);
+            if sos::orient(qb, pa, qprev) == want_q && sos::orient(qb, pa, qnext) == want_q {
+                return Some((fp + a, fq + b));
+            }
+        }
+    }
+    None
+}
+
 fn flip(b: Bound) -> Bound {
     match b {
         Bound::Lower => Bound::Upper,

@@ -17,10 +17,14 @@
 mod bitangent;
 #[cfg(feature = "alloc")]
 mod cross_section;
+#[cfg(feature = "alloc")]
+mod visibility;
 
 pub use bitangent::{bitangents, is_free, Bitangent};
 #[cfg(feature = "alloc")]
 pub use cross_section::{cross_section, Interval};
+#[cfg(feature = "alloc")]
+pub use visibility::free_bitangents;
 
 use crate::geom::sos::{Angle, RankedPoint};
 use crate::geom::Sign;
@@ -80,7 +84,7 @@ pub fn tangent_vertex(
 
 /// Whether the object is ahead of the query point `q` along the line of direction θ
 /// through it. `None` if the line does not cross the object (perturbed).
-pub(crate) fn object_ahead_of_query(
+pub fn object_ahead_of_query(
     scene: &SceneRef<'_>,
     object: ObjectId,
     angle: &Angle,
@@ -140,7 +144,7 @@ pub fn ranked(scene: &SceneRef<'_>, i: usize) -> RankedPoint {
 
 /// Whether the object is ahead of vertex `o` along the line of direction θ through `o`.
 /// `None` if the line does not cross the object (perturbed).
-pub(crate) fn object_ahead_of(
+pub fn object_ahead_of(
     scene: &SceneRef<'_>,
     object: ObjectId,
     angle: &Angle,
