@@ -111,27 +111,54 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
         start: Vec::new(),
     };
     let mut start = alloc::vec![[[0u32; 2]; 2]; complex.cylinders.len()];
-    for (i, c) in complex.cylinders.iter().enumerate() {
-        let left = complex_left(&b, c);
-        for (arc, chain, side) in [(0, c.bottom, Side::Below), (1, c.top, Side::Above)] {
-            let Some(chain) = chain else { continue };
-            for (l, layer) in far_layers(chain, side).into_iter().enumerate() {
-                let list = b
-                    .tilings
-                    .get(slot(chain, side, layer))
-                    .map(Vec::as_slice)
-                    .unwrap_or(&[]);
-                // The last far cylinder whose left wall is at or before this one's.
-                let k = list.partition_point(|id| {
-                    complex.cylinders.get(id.index()).is_some_and(|f| {
-                        match (complex_left(&b, f), &left) {
-                            (None, _) => true,
-                            (Some(_), None) => false,
-                            (Some(x), Some(y)) => x.cmp_angle(y) != Ordering::Greater,
+    // For every chain, merge each tiling with the tilings across the chain: both are sorted
+    // by left wall, so one pass finds, for every cylinder, the far cylinder containing its
+    // left wall.
+    let left = |id: &CylinderId| {
+        complex
+            .cylinders
+            .get(id.index())
+            .and_then(|c| complex_left(&b, c))
+    };
+    let not_after = |x: &Option<Angle>, y: &Option<Angle>| match (x, y) {
+        (None, _) => true,
+        (Some(_), None) => false,
+        (Some(x), Some(y)) => x.cmp_angle(y) != Ordering::Greater,
+    };
+    for object in 0..scene.len() {
+        for bound in [
+            crate::line_space::Bound::Lower,
+            crate::line_space::Bound::Upper,
+        ] {
+            let chain = Chain {
+                object: crate::scene::ObjectId(object as u32),
+                bound,
+            };
+            // Cylinders above the chain leave it through their bottom (arc 0) to the side
+            // below, and conversely.
+            for (own_side, arc, far_side) in
+                [(Side::Above, 0, Side::Below), (Side::Below, 1, Side::Above)]
+            {
+                for own_layer in far_layers(chain, own_side) {
+                    let Some(own) = b.tilings.get(slot(chain, own_side, own_layer)) else {
+                        continue;
+                    };
+                    for (l, far_layer) in far_layers(chain, far_side).into_iter().enumerate() {
+                        let Some(far) = b.tilings.get(slot(chain, far_side, far_layer)) else {
+                            continue;
+                        };
+                        let mut j = 0;
+                        for id in own {
+                            let l_own = left(id);
+                            while far.get(j + 1).is_some_and(|f| not_after(&left(f), &l_own)) {
+                                j += 1;
+                            }
+                            if let Some(e) = start.get_mut(id.index()) {
+                                e[arc][l] = j as u32;
+                            }
                         }
-                    })
-                });
-                start[i][arc][l] = k.saturating_sub(1) as u32;
+                    }
+                }
             }
         }
     }
