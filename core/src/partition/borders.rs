@@ -93,38 +93,21 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
             }
         }
     }
-    let left = |id: &CylinderId| match complex.cylinders.get(id.index()).map(|c| c.left) {
-        Some(Wall::Vertex(v)) => angles.get(v.index()),
-        _ => None,
-    };
-    for list in &mut tilings {
-        list.sort_by(|a, b| match (left(a), left(b)) {
-            (None, None) => Ordering::Equal,
-            (None, Some(_)) => Ordering::Less,
-            (Some(_), None) => Ordering::Greater,
-            (Some(x), Some(y)) => x.cmp_angle(y),
-        });
-    }
-    let mut b = Borders {
-        angles,
-        tilings,
-        start: Vec::new(),
-    };
-    let mut start = alloc::vec![[[0u32; 2]; 2]; complex.cylinders.len()];
-    // For every chain, merge each tiling with the tilings across the chain: both are sorted
-    // by left wall, so one pass finds, for every cylinder, the far cylinder containing its
-    // left wall.
+    // Vertices are sorted by θ (an invariant `validate` checks), so a wall's position in θ
+    // is its vertex index, θ = 0 first: sorting and merging compare integers.
     let left = |id: &CylinderId| {
         complex
             .cylinders
             .get(id.index())
-            .and_then(|c| complex_left(&b, c))
+            .map_or(0, |c| wall_rank(c.left))
     };
-    let not_after = |x: &Option<Angle>, y: &Option<Angle>| match (x, y) {
-        (None, _) => true,
-        (Some(_), None) => false,
-        (Some(x), Some(y)) => x.cmp_angle(y) != Ordering::Greater,
-    };
+    for list in &mut tilings {
+        list.sort_by_key(left);
+    }
+    let mut start = alloc::vec![[[0u32; 2]; 2]; complex.cylinders.len()];
+    // For every chain, merge each tiling with the tilings across the chain: both are sorted
+    // by left wall, so one pass finds, for every cylinder, the far cylinder containing its
+    // left wall.
     for object in 0..scene.len() {
         for bound in [
             crate::line_space::Bound::Lower,
@@ -140,17 +123,17 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
                 [(Side::Above, 0, Side::Below), (Side::Below, 1, Side::Above)]
             {
                 for own_layer in far_layers(chain, own_side) {
-                    let Some(own) = b.tilings.get(slot(chain, own_side, own_layer)) else {
+                    let Some(own) = tilings.get(slot(chain, own_side, own_layer)) else {
                         continue;
                     };
                     for (l, far_layer) in far_layers(chain, far_side).into_iter().enumerate() {
-                        let Some(far) = b.tilings.get(slot(chain, far_side, far_layer)) else {
+                        let Some(far) = tilings.get(slot(chain, far_side, far_layer)) else {
                             continue;
                         };
                         let mut j = 0;
                         for id in own {
                             let l_own = left(id);
-                            while far.get(j + 1).is_some_and(|f| not_after(&left(f), &l_own)) {
+                            while far.get(j + 1).is_some_and(|f| left(f) <= l_own) {
                                 j += 1;
                             }
                             if let Some(e) = start.get_mut(id.index()) {
@@ -162,15 +145,18 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
             }
         }
     }
-    b.start = start;
-    b
+    Borders {
+        angles,
+        tilings,
+        start,
+    }
 }
 
-/// The left wall angle of a cylinder from the cache (`None`: θ = 0).
-fn complex_left(b: &Borders, c: &super::Cylinder) -> Option<Angle> {
-    match c.left {
-        Wall::Zero => None,
-        Wall::Vertex(v) => b.angles.get(v.index()).copied(),
+/// The position of a wall in θ order: θ = 0 first, then by vertex (vertices are sorted).
+fn wall_rank(w: Wall) -> usize {
+    match w {
+        Wall::Zero => 0,
+        Wall::Vertex(v) => v.index() + 1,
     }
 }
 
