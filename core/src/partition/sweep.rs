@@ -13,7 +13,6 @@
 
 use alloc::collections::BTreeMap;
 use alloc::vec::Vec;
-use core::ops::Bound as RangeBound;
 
 use super::{Complex, Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::geom::sos::Angle;
@@ -23,23 +22,59 @@ use crate::scene::{ObjectId, SceneRef};
 
 type Key = (Option<Chain>, Option<ObjectId>, Option<ObjectId>);
 
-/// The open cylinders, indexed by (bottom chain, floor, ceiling) and (top chain, floor,
-/// ceiling): at a fixed θ each key names at most one interval.
-#[derive(Default)]
+/// The open cylinders by bottom chain and by top chain. At a fixed θ at most two open
+/// cylinders share a chain on one side (the layers before and after its object), and a key
+/// (chain, floor, ceiling) names at most one: two slots per chain, no map on the hot path.
 struct Open {
-    by_bottom: BTreeMap<Key, CylinderId>,
-    by_top: BTreeMap<Key, CylinderId>,
+    by_bottom: Vec<[Option<CylinderId>; 2]>,
+    by_top: Vec<[Option<CylinderId>; 2]>,
+}
+
+/// Slot of a chain; the last slot is for "no chain" (the unbounded cylinders).
+fn chain_slot(chain: Option<Chain>, objects: usize) -> usize {
+    match chain {
+        None => 2 * objects,
+        Some(c) => 2 * c.object.0 as usize + usize::from(c.bound == Bound::Upper),
+    }
 }
 
 impl Open {
-    fn insert(&mut self, id: CylinderId, c: &Cylinder) {
-        self.by_bottom.insert((c.bottom, c.floor, c.ceiling), id);
-        self.by_top.insert((c.top, c.floor, c.ceiling), id);
+    fn new(objects: usize) -> Open {
+        Open {
+            by_bottom: alloc::vec![[None; 2]; 2 * objects + 1],
+            by_top: alloc::vec![[None; 2]; 2 * objects + 1],
+        }
     }
 
-    fn remove(&mut self, c: &Cylinder) {
-        self.by_bottom.remove(&(c.bottom, c.floor, c.ceiling));
-        self.by_top.remove(&(c.top, c.floor, c.ceiling));
+    fn slots(
+        index: &mut [[Option<CylinderId>; 2]],
+        chain: Option<Chain>,
+    ) -> Option<&mut [Option<CylinderId>; 2]> {
+        let n = (index.len() - 1) / 2;
+        index.get_mut(chain_slot(chain, n))
+    }
+
+    fn insert(&mut self, id: CylinderId, c: &Cylinder) -> Result<(), ComplexError> {
+        for (index, chain) in [(&mut self.by_bottom, c.bottom), (&mut self.by_top, c.top)] {
+            let slots = Open::slots(index, chain).ok_or(ComplexError::TooLarge)?;
+            let free = slots
+                .iter_mut()
+                .find(|s| s.is_none())
+                .ok_or(ComplexError::SweepUnmatchedAtZero)?;
+            *free = Some(id);
+        }
+        Ok(())
+    }
+
+    fn remove(&mut self, id: CylinderId, c: &Cylinder) {
+        for (index, chain) in [(&mut self.by_bottom, c.bottom), (&mut self.by_top, c.top)] {
+            if let Some(slots) = Open::slots(index, chain) {
+                slots
+                    .iter_mut()
+                    .filter(|s| **s == Some(id))
+                    .for_each(|s| *s = None);
+            }
+        }
     }
 }
 
@@ -88,14 +123,14 @@ fn free_vertices(scene: &SceneRef<'_>) -> Vec<Vertex> {
 pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
     let vertices = free_vertices(scene);
     let mut cylinders: Vec<Cylinder> = Vec::new();
-    let mut open = Open::default();
+    let mut open = Open::new(scene.len());
 
     let push = |cylinders: &mut Vec<Cylinder>,
                 open: &mut Open,
                 c: Cylinder|
      -> Result<CylinderId, ComplexError> {
         let id = CylinderId::from_index(cylinders.len()).ok_or(ComplexError::TooLarge)?;
-        open.insert(id, &c);
+        open.insert(id, &c)?;
         cylinders.push(c);
         Ok(id)
     };
@@ -113,7 +148,11 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         };
         push(&mut cylinders, &mut open, c)?;
     }
-    let initial: BTreeMap<Key, CylinderId> = open.by_bottom.clone();
+    let initial: BTreeMap<Key, CylinderId> = cylinders
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ((c.bottom, c.floor, c.ceiling), CylinderId(i as u32)))
+        .collect();
 
     for (vi, v) in vertices.iter().enumerate() {
         let wall = Wall::Vertex(VertexId::from_index(vi).ok_or(ComplexError::TooLarge)?);
@@ -147,13 +186,13 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
             q_crossed: q_lower,
         };
 
-        let find = |index: &BTreeMap<Key, CylinderId>, chain: Chain, corner: Corner| {
-            let lo = (Some(chain), None, None);
-            index
-                .range((RangeBound::Included(lo), RangeBound::Unbounded))
-                .take_while(|(k, _)| k.0 == Some(chain))
-                .find(|(k, _)| corner.matches(&b, k.1, k.2))
-                .map(|(_, id)| *id)
+        let find = |index: &[[Option<CylinderId>; 2]], chain: Chain, corner: Corner| {
+            let slots = index.get(chain_slot(Some(chain), scene.len()))?;
+            slots.iter().flatten().copied().find(|id| {
+                cylinders
+                    .get(id.index())
+                    .is_some_and(|c| corner.matches(&b, c.floor, c.ceiling))
+            })
         };
         let missing = ComplexError::SweepLostCylinder { vertex: vi };
 
@@ -169,7 +208,7 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         let close = |cylinders: &mut Vec<Cylinder>, open: &mut Open, id: CylinderId| -> Cylinder {
             let c = &mut cylinders[id.index()];
             c.right = wall;
-            open.remove(c);
+            open.remove(id, c);
             *c
         };
         let ct = close(&mut cylinders, &mut open, t);
@@ -232,10 +271,13 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
     }
 
     // θ = 2π: the open cylinders continue into those opened at θ = 0.
-    for (key, id) in &open.by_bottom {
-        let first = *initial.get(key).ok_or(ComplexError::SweepUnmatchedAtZero)?;
+    for id in open.by_bottom.iter().flatten().flatten().copied() {
+        let c = &cylinders[id.index()];
+        let first = *initial
+            .get(&(c.bottom, c.floor, c.ceiling))
+            .ok_or(ComplexError::SweepUnmatchedAtZero)?;
         cylinders[id.index()].right_neighbour = Some(first);
-        cylinders[first.index()].left_neighbour = Some(*id);
+        cylinders[first.index()].left_neighbour = Some(id);
     }
     let mut complex = Complex {
         vertices,
