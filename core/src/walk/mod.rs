@@ -9,18 +9,133 @@
 //!
 //! The walk starts at θ = 0 among the cylinders crossing the permanent wall and visits
 //! the events in perturbed order; the view is the sequence of ceilings.
+//!
+//! # Ray trees ([`ray_tree`])
+//!
+//! The walker has two anchorings ([`Anchor`]): `Point` (the layer containing the eye, the
+//! view) and `Floor(M)` (the layer whose floor is M: the segments starting where the line
+//! leaves M), walked over an exact open angular range from a (virtual) eye. An anchored
+//! walk starts in the cylinder with floor M whose θ-range contains the range start and
+//! whose bottom chain lies below and top chain above the eye's line (by a scan over the
+//! cylinders for now — the history's sheet-anchored locate would make it logarithmic);
+//! events exactly on the opening ray belong to the start state, events on the closing ray
+//! are dropped.
+//!
+//! The tree is built by **recursion per interval**, not by the paper's lock-step walk of
+//! all generations: each primary interval is resolved by its ceiling —
+//! * a **screen** S: the same eye walks the same range anchored to S (S is not in the
+//!   branch and uses no depth);
+//! * a **mirror** M: the range is split by the directions to M's vertices (the hit edge
+//!   changes there); per edge the eye is reflected across the edge's line and rounded
+//!   exactly to the query grid ([`optics`]); the range is mapped to the new eye (exactly
+//!   `E' → v` at a vertex of the edge, otherwise through the hit point on the edge rounded
+//!   to the query grid — computed in `f64`, it only places the range end) and reversed
+//!   (mirrors flip orientation); the new eye walks it anchored to M, one level deeper;
+//! * a **refractive** M (tangent law, DESIGN.md §6): split by the entry edge, entry eye
+//!   `E₁ = F + η(E − F)`, split by the exit edge (M's own vertices seen from `E₁`), exit
+//!   eye `E₂ = F' + (E₁ − F')/η`, walked anchored to M; orientation is preserved, and the
+//!   pass is one depth level with M once in the branch.
+//!
+//! Boundaries deeper than the primary are mapped back to primary angles in `f64` for
+//! output. A later optimization keeps the secondary traces of one primary interval in a
+//! fixed-capacity `heapless` array and walks them in lock step (no allocation; the
+//! current version allocates the leaves and branches).
+//!
+//! A rounded eye on or across its interface line is an error
+//! ([`WalkError::DegenerateOptics`], as in the reference); an eye beyond the query range
+//! (`|raw| > 2⁵²`, e.g. after refraction by a large η far from the interface) is
+//! [`WalkError::EyeOutOfRange`].
+//!
+//! **The tangent law against Snell's law.** The tangent law `tan θ₂ = tan θ₁ / η` keeps
+//! refraction a change of eye (every refracted ray passes through one virtual point), but
+//! it bends less than Snell's `sin θ₂ = sin θ₁ / η` near grazing incidence and has no
+//! critical angle. Refraction angle θ₂ in degrees for η = 1.5, from
+//! `tests/tests/ray_trees.rs` (`tangent_law_error_table`, run with `--nocapture` for
+//! η = 1.33 and 1.6 as well):
+//!
+//! | θ₁ | Snell | tangent law | error |
+//! |---:|---:|---:|---:|
+//! | 0 | 0.000 | 0.000 | +0.000 |
+//! | 10 | 6.648 | 6.704 | +0.057 |
+//! | 20 | 13.180 | 13.639 | +0.459 |
+//! | 30 | 19.471 | 21.052 | +1.581 |
+//! | 40 | 25.374 | 29.223 | +3.849 |
+//! | 50 | 30.710 | 38.467 | +7.757 |
+//! | 60 | 35.264 | 49.107 | +13.842 |
+//! | 70 | 38.790 | 61.367 | +22.578 |
+//! | 80 | 41.036 | 75.185 | +34.149 |
+//! | 85 | 41.616 | 82.524 | +40.908 |
+//! | 89 | 41.803 | 88.500 | +46.698 |
 
-#[cfg(feature = "alloc")]
+pub mod optics;
+mod tree;
 mod view;
 
-#[cfg(feature = "alloc")]
+pub use tree::{ray_tree, TreeInterval};
 pub use view::{view, ViewInterval};
 
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
-use crate::line_space::{ranked, tangents_from, Bound, Chain};
+use crate::line_space::{ranked, Bound, Chain};
 use crate::partition::{Complex, CylinderId, Layer, Location, Side, Wall};
 use crate::scene::{ObjectId, SceneRef};
+
+/// How a walk follows a trace across primary walls.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Anchor {
+    /// Stay in the layer containing the eye (the view from a point): across a chain where
+    /// the object is crossed, the layer before it if its tangent vertex is ahead of the
+    /// eye, after it otherwise.
+    Point,
+    /// Stay in the layer whose floor is this object (the segments starting where the line
+    /// leaves it): across a chain where its object H is crossed, the layer before H (H
+    /// appears between the floor and the old ceiling); leaving it, the single layer. Used
+    /// behind mirrors, refractive objects and screens; the eye is virtual and may lie
+    /// anywhere.
+    Floor(ObjectId),
+}
+
+/// A position on the unwrapped circle of a range walk: `lap` 1 is past θ = 2π.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Position {
+    pub(crate) lap: u8,
+    pub(crate) angle: Angle,
+}
+
+/// The tangents from `q` to `object` (as [`crate::line_space::tangents_from`]) and how many exist: two if `q`
+/// is outside the object, none if it is inside (possible for virtual eyes).
+fn tangents_of(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    q: QueryPoint,
+) -> ([(usize, Bound); 2], usize) {
+    use crate::geom::sos::orient_query;
+    use crate::geom::Sign;
+    let mut out = [(0, Bound::Lower); 2];
+    let mut found = 0;
+    let Some(obj) = scene.object(object) else {
+        return (out, 0);
+    };
+    let (first, n) = (obj.first_vertex(), obj.len());
+    for k in 0..n {
+        let h = ranked(scene, first + k);
+        let prev = ranked(scene, first + (k + n - 1) % n);
+        let next = ranked(scene, first + (k + 1) % n);
+        let (sp, sn) = (orient_query(h, prev, q), orient_query(h, next, q));
+        if sp == sn {
+            let bound = if sn == Sign::Positive {
+                Bound::Lower
+            } else {
+                Bound::Upper
+            };
+            if let Some(slot) = out.get_mut(found) {
+                *slot = (first + k, bound);
+                found += 1;
+            }
+        }
+    }
+    (out, found)
+}
 
 /// One step of a walk: the trace entered `cylinder` at `angle`, crossing the chain of the
 /// object of `vertex` (a global vertex index) or, with `vertex: None`, a secondary wall.
@@ -54,6 +169,18 @@ pub enum WalkError {
     NotFree(Location),
     /// The complex is inconsistent (no cylinder across a wall, or the walk did not end).
     Corrupt,
+    /// A virtual eye rounded to the query grid fell on or across the interface line it was
+    /// built from (the reference's `DegenerateOptics`); `level` is the branch index of the
+    /// mirror or refractive object.
+    DegenerateOptics {
+        /// Depth level of the interaction.
+        level: usize,
+    },
+    /// A virtual eye left the query range (`|raw| > 2⁵²`, about ±10⁶ units).
+    EyeOutOfRange,
+    /// An anchored walk found no cylinder with the anchor as floor at its start (the
+    /// rounded range end missed the object's sheet).
+    NoStart,
 }
 
 impl core::fmt::Display for WalkError {
@@ -67,6 +194,11 @@ impl core::fmt::Display for WalkError {
             }
             WalkError::NotFree(Location::Free { .. }) => write!(f, "viewpoint is free"),
             WalkError::Corrupt => write!(f, "the complex is inconsistent"),
+            WalkError::DegenerateOptics { level } => {
+                write!(f, "rounded virtual eye is degenerate at level {level}")
+            }
+            WalkError::EyeOutOfRange => write!(f, "a virtual eye left the query range"),
+            WalkError::NoStart => write!(f, "an anchored walk found no start cylinder"),
         }
     }
 }
@@ -93,24 +225,57 @@ impl Complex {
             .enumerate()
             .filter(|(_, c)| c.left == Wall::Zero)
             .map(|(i, c)| (CylinderId::from_index(i).unwrap_or(CylinderId::ZERO), c));
-        let mut cur = self
+        let cur = self
             .locate_among(scene, q, &Angle::ZERO, zero)
             .ok_or(WalkError::Corrupt)?;
-        let mut theta = Angle::ZERO;
         step(&Step {
-            angle: theta,
+            angle: Angle::ZERO,
             vertex: None,
             ahead: false,
             cylinder: cur,
         });
+        self.walk_from(scene, q, Anchor::Point, cur, Angle::ZERO, None, &mut step)
+    }
+
+    /// The walker shared by [`Complex::walk_trace`] and the anchored walks of ray trees:
+    /// from cylinder `cur` at angle `from`, counter-clockwise, until `end` (`None`: until
+    /// θ = 2π; `Some(end)`: the first event at or after `end`, which may lie past θ = 0 —
+    /// the walk then crosses the permanent wall to the right neighbour). Calls `step` for
+    /// every cylinder entered after the start. With [`Anchor::Floor`]`(m)` the chains of `m`
+    /// are never crossed (the caller keeps the trace inside `m`'s sheet) and the eye may lie
+    /// anywhere, even inside an object: only the tangents that exist are used.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn walk_from(
+        &self,
+        scene: &SceneRef<'_>,
+        q: QueryPoint,
+        anchor: Anchor,
+        mut cur: CylinderId,
+        from: Angle,
+        end: Option<Position>,
+        step: &mut impl FnMut(&Step),
+    ) -> Result<(), WalkError> {
+        use core::cmp::Ordering;
+        let mut theta = from;
+        let mut lap = 0u8;
+        let before = |a: (u8, &Angle), b: (u8, &Angle)| {
+            a.0 < b.0 || (a.0 == b.0 && a.1.cmp_angle(b.1) == Ordering::Less)
+        };
         for _ in 0..4 * self.cylinders.len() + 4 {
             let c = self.cylinder(cur).ok_or(WalkError::Corrupt)?;
             // The first exit after θ: the right wall, or a crossing of the bottom or top chain.
-            let mut best: Option<(Angle, Option<ChainExit>)> =
-                self.wall_angle(scene, c.right).map(|a| (a, None));
+            let mut best: Option<(u8, Angle, Option<ChainExit>)> = match c.right {
+                // The permanent wall ends a full-circle walk; a range walk crosses it.
+                Wall::Zero => end.map(|_| (lap + 1, Angle::ZERO, None)),
+                w => self.wall_angle(scene, w).map(|a| (lap, a, None)),
+            };
             for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
                 let Some(chain) = chain else { continue };
-                for (h, bound) in tangents_from(scene, chain.object, q) {
+                if anchor == Anchor::Floor(chain.object) {
+                    continue;
+                }
+                let (tangents, count) = tangents_of(scene, chain.object, q);
+                for &(h, bound) in tangents.iter().take(count) {
                     let forward = Angle::from_query(q, ranked(scene, h));
                     // The line q → h lies on `bound`; its reverse on the other chain.
                     let (a, ahead) = if bound == chain.bound {
@@ -118,13 +283,14 @@ impl Complex {
                     } else {
                         (forward.reversed(), false)
                     };
-                    let later = a.cmp_angle(&theta) == core::cmp::Ordering::Greater;
+                    let later = a.cmp_angle(&theta) == Ordering::Greater;
                     if later
                         && best
                             .as_ref()
-                            .is_none_or(|(b, _)| a.cmp_angle(b) == core::cmp::Ordering::Less)
+                            .is_none_or(|(l, b, _)| before((lap, &a), (*l, b)))
                     {
                         best = Some((
+                            lap,
                             a,
                             Some(ChainExit {
                                 chain,
@@ -136,10 +302,19 @@ impl Complex {
                     }
                 }
             }
-            let Some((angle, exit)) = best else {
-                return Ok(());
-            }; // θ reached 2π
+            let Some((l, angle, exit)) = best else {
+                return match end {
+                    None => Ok(()), // θ reached 2π
+                    Some(_) => Err(WalkError::Corrupt),
+                };
+            };
+            if let Some(e) = &end {
+                if !before((l, &angle), (e.lap, &e.angle)) {
+                    return Ok(());
+                }
+            }
             theta = angle;
+            lap = l;
             cur = match exit {
                 None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
                 Some(ChainExit {
@@ -153,13 +328,22 @@ impl Complex {
                     };
                     let layer = if side != crossed {
                         Layer::Around
-                    } else if ahead {
+                    } else if ahead || matches!(anchor, Anchor::Floor(_)) {
+                        // Point: h ahead of q, so the segment through q ends at the object.
+                        // Floor(m): the object appears between m and the old ceiling.
                         Layer::Before
                     } else {
                         Layer::After
                     };
-                    self.across_from(scene, cur, side, layer, &theta)
-                        .ok_or(WalkError::Corrupt)?
+                    let next = self
+                        .across(scene, chain, side, layer, &theta)
+                        .ok_or(WalkError::Corrupt)?;
+                    if let Anchor::Floor(m) = anchor {
+                        if self.cylinder(next).and_then(|n| n.floor) != Some(m) {
+                            return Err(WalkError::Corrupt);
+                        }
+                    }
+                    next
                 }
             };
             let (vertex, ahead) = exit.map_or((None, false), |e| (Some(e.vertex), e.ahead));

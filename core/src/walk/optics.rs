@@ -1,0 +1,103 @@
+//! Virtual eyes of the ray-tree optics, rounded exactly to the query grid (DESIGN.md §6).
+//!
+//! Every interaction moves the eye `E` along the normal of an interface line `ab`: with `F`
+//! the foot of `E` on the line, the new eye is `E' = F + k·(E − F)` — `k = −1` reflects
+//! (mirror), `k = η` enters a refractive object and `k = 1/η` leaves it (the tangent law
+//! η₁·tanθ₁ = η₂·tanθ₂, see [`crate::walk`] for its error against Snell's law). The result
+//! is rounded to the query grid (2⁻³², nearest, ties away from zero) at once, as the
+//! reference does with `round_eyes`; all later predicates are exact for the rounded eye.
+//!
+//! **Exact rounding in `i128`.** In query units (raw 2⁻³²) let `w = E − a` and `d = b − a`
+//! (`d` in scene units, raw 2⁻¹⁶, so `|d|` components `< 2³¹`), `N = |d|² < 2⁶³`,
+//! `t = dot(w, d)`. The scale of `d` cancels in `t·d/N`, which is `F − a` in query units:
+//!
+//! ```text
+//! E' = a + (t·d)/N + k·g/N,   g = N·w − t·d   (= N·(E − F), so |g/N| ≤ |w|)
+//! ```
+//!
+//! Bit budget, with `|E| ≤ 2⁵²` and `|a| ≤ 2⁴⁶`: `|w| < 2⁵³`, `|t| < 2⁸⁵`, `|t·d| < 2¹¹⁶`,
+//! `|N·w| < 2¹¹⁶`, `|g| < 2¹¹⁷` — all in `i128`. The quotient `k·g/N` with `k = kn/kd`
+//! (`|kn|, kd ≤ 2²²`) would not fit as one fraction (`2²² · 2¹¹⁷`), so it is split by
+//! quotient and remainder: `t·d = q₁N + r₁`, `g = q₂N + r₂`, `kn·q₂ = q₄·kd + r₄` (Euclidean,
+//! `0 ≤ r < divisor`; `|q₁|, |q₂| ≤ |w| < 2⁵⁴` because they are coordinates of `F − a` and
+//! `E − F`), leaving
+//!
+//! ```text
+//! E' = (a + q₁ + q₄) + (r₄·N + r₁·kd + kn·r₂) / (kd·N)
+//! ```
+//!
+//! with a numerator `< 3·2⁸⁵` and a denominator `< 2⁸⁵`; one more Euclidean division and a
+//! comparison of twice the remainder with the denominator round it. `tests/tests/ray_trees.rs`
+//! checks this against big rationals at the extremes of the range.
+
+use crate::geom::point::QUERY_MAX_ABS_RAW;
+use crate::geom::{Point, QueryPoint};
+use crate::scene::Eta;
+
+/// `round(a + td/N + kn·g/(kd·N))` for one coordinate (see the module documentation).
+fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> i128 {
+    let (q1, r1) = (td.div_euclid(n), td.rem_euclid(n));
+    let (q2, r2) = (g.div_euclid(n), g.rem_euclid(n));
+    let kq = kn * q2;
+    let (q4, r4) = (kq.div_euclid(kd), kq.rem_euclid(kd));
+    let num = r4 * n + r1 * kd + kn * r2;
+    let den = kd * n;
+    let (j, s) = (num.div_euclid(den), num.rem_euclid(den));
+    let base = a + q1 + q4 + j;
+    match (2 * s).cmp(&den) {
+        core::cmp::Ordering::Greater => base + 1,
+        // Exactly half-way: away from zero.
+        core::cmp::Ordering::Equal if base >= 0 => base + 1,
+        _ => base,
+    }
+}
+
+/// The eye `F + (kn/kd)·(E − F)` for the foot `F` of `e` on the line `ab`, rounded to the
+/// query grid (nearest, ties away from zero). `None` if `a == b`, `kd ≤ 0`, a factor is
+/// beyond `2²²` in magnitude, or the result leaves the query range.
+pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Option<QueryPoint> {
+    if kd <= 0 || kd > 1 << 22 || kn.unsigned_abs() > 1 << 22 {
+        return None;
+    }
+    let aq = a.to_query();
+    let (dx, dy) = (
+        i128::from(b.x()) - i128::from(a.x()),
+        i128::from(b.y()) - i128::from(a.y()),
+    );
+    let n = dx * dx + dy * dy;
+    if n == 0 {
+        return None;
+    }
+    // w in query units; d in scene units. t·d/N is then in query units as well.
+    let (wx, wy) = (
+        i128::from(e.x()) - i128::from(aq.x()),
+        i128::from(e.y()) - i128::from(aq.y()),
+    );
+    let t = wx * dx + wy * dy;
+    let (tdx, tdy) = (t * dx, t * dy);
+    let (gx, gy) = (n * wx - tdx, n * wy - tdy);
+    let (kn, kd) = (i128::from(kn), i128::from(kd));
+    let x = round_coordinate(i128::from(aq.x()), tdx, gx, n, kn, kd);
+    let y = round_coordinate(i128::from(aq.y()), tdy, gy, n, kn, kd);
+    let lim = i128::from(QUERY_MAX_ABS_RAW);
+    if x.abs() > lim || y.abs() > lim {
+        return None;
+    }
+    QueryPoint::from_raw(x as i64, y as i64)
+}
+
+/// The reflection of `e` across the line `ab`, rounded to the query grid.
+pub fn reflect(e: QueryPoint, a: Point, b: Point) -> Option<QueryPoint> {
+    transform_eye(e, a, b, -1, 1)
+}
+
+/// The tangent-law eye at the interface `ab`: entering (`F + η(E − F)`) or leaving
+/// (`F + (E − F)/η`) an object of index `eta`, rounded to the query grid.
+pub fn refract(e: QueryPoint, a: Point, b: Point, eta: Eta, entering: bool) -> Option<QueryPoint> {
+    let (raw, one) = (i64::from(eta.raw()), 1i64 << Eta::FRAC_BITS);
+    if entering {
+        transform_eye(e, a, b, raw, one)
+    } else {
+        transform_eye(e, a, b, one, raw)
+    }
+}

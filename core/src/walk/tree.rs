@@ -1,0 +1,815 @@
+//! Ray trees: the primary view, then recursively what is seen through mirrors, refractive
+//! objects and screens (DESIGN.md §6, the paper's §5).
+//!
+//! See the module documentation of [`crate::walk`] for the model; this file holds the
+//! recursion. Every primary interval (a run of the primary walk with one ceiling) is a
+//! *piece*: an exact open angular range `(from, to)` of directions from an eye, with the
+//! object seen. A piece is resolved by its ceiling's material:
+//!
+//! * nothing or an opaque object (or any object once the depth is used up): a leaf;
+//! * a screen S: the same eye walks the same range anchored to the layer whose floor is S
+//!   ([`super::Anchor::Floor`]); its pieces are resolved in turn at the same level;
+//! * a mirror M: the range is split where the hit edge changes (the directions to M's
+//!   vertices); per edge the eye is reflected across the edge's line, rounded
+//!   ([`super::optics`]), and the reflected range — reversed, mirrors flip orientation —
+//!   is walked anchored to M;
+//! * a refractive M: split by the entry edge, tangent-law eye at the entry edge, split by
+//!   the exit edge (M's own vertices seen from that eye), tangent-law eye at the exit edge,
+//!   walked anchored to M; orientation is preserved.
+//!
+//! Leaves come out in primary angular order; neighbours with equal branches are merged.
+
+use alloc::vec::Vec;
+use core::cmp::Ordering;
+
+use super::{optics, Anchor, Position, WalkError};
+use crate::geom::predicates::Direction;
+use crate::geom::sos::Angle;
+use crate::geom::{Point, QueryPoint, Sign};
+use crate::line_space::{ranked, tangent_vertex, Chain};
+use crate::partition::{Complex, CylinderId, Wall};
+use crate::scene::{Material, ObjectId, SceneRef};
+
+/// One interval of a ray-tree sweep: primary directions from `start` counter-clockwise to
+/// the next interval's start, over which the branch is constant.
+#[derive(Clone, Debug)]
+pub struct TreeInterval {
+    /// Primary angle of the start boundary in radians in `[0, 2π)`, for output: exact up
+    /// to `f64` rounding for a primary boundary, mapped back through the hit edges in `f64`
+    /// for a deeper one. `0.0` for a sweep without boundaries.
+    pub start: f64,
+    /// The exact primary direction of the start boundary, when the boundary is primary
+    /// (caused by the view from the real eye or a split of a primary mirror/refractive
+    /// object); `None` for deeper boundaries and for a sweep without boundaries.
+    pub exact_start: Option<Angle>,
+    /// Objects along the ray, primary first, screens left out, at most `depth + 1`.
+    pub branch: Vec<ObjectId>,
+    /// The vertex causing the start boundary (global index); `None` without boundaries.
+    pub start_vertex: Option<usize>,
+}
+
+/// A range end: a direction from an eye, with the vertex it points at (and whether that
+/// vertex is ahead of the eye) when it is the direction of an eye–vertex pair.
+#[derive(Clone, Copy, Debug)]
+struct Dir {
+    angle: Angle,
+    vertex: Option<(usize, bool)>,
+}
+
+/// How the vertex of a boundary is found once the branches on both sides are known (the
+/// reference's rule): among the stages of the ray at the boundary (the primary stage, then
+/// one per hop), the first one whose ray, beyond its origin, holds a vertex of the object
+/// that stage hits on either side; the vertex nearest to that stage's eye. The stage where
+/// the boundary arises is tested exactly; earlier stages (a coincidence, frequent only in
+/// grid-aligned scenes) are tested in `f64` with a relative tolerance of 1e-10 — an exact
+/// test needs 256-bit products (later work).
+#[derive(Clone, Debug)]
+struct Rule {
+    /// The hops up to the stage where the boundary arises.
+    hops: Vec<Hop>,
+    /// The eye of that stage and the exact direction of the boundary from it.
+    eye: QueryPoint,
+    dir: (i128, i128),
+    /// Branch index of the object hit by that stage.
+    level: usize,
+    /// The vertex that caused the boundary, if no vertex is found by the rule.
+    fallback: Option<usize>,
+}
+
+#[derive(Clone, Debug)]
+struct Boundary {
+    radians: f64,
+    exact: Option<Angle>,
+    rule: Rule,
+}
+
+/// An exact open range of directions from an eye with the object seen over it.
+struct Piece {
+    from: Dir,
+    to: Dir,
+    ceiling: Option<ObjectId>,
+    boundary: Boundary,
+}
+
+struct Leaf {
+    branch: Vec<ObjectId>,
+    boundary: Boundary,
+}
+
+/// One change of eye: a ray from `prev` hits the line of the edge `a → b` (global vertex
+/// indices) and continues on a line through `next`.
+#[derive(Clone, Copy, Debug)]
+struct Hop {
+    prev: QueryPoint,
+    a: usize,
+    b: usize,
+    next: QueryPoint,
+    /// Branch index of the object hit by the stage starting at this hop.
+    level: usize,
+}
+
+struct Tree<'a, 's> {
+    complex: &'a Complex,
+    scene: &'a SceneRef<'s>,
+    hops: Vec<Hop>,
+    branch: Vec<ObjectId>,
+}
+
+/// The ray trees from the free point `q` to depth `depth` over the full circle: intervals
+/// sorted by start angle, each with its branch and the vertex causing its start boundary
+/// (the last interval continues through θ = 0 into the first). Neighbouring intervals have
+/// different branches. Build the complex over the whole scene, screens included.
+///
+/// Errors: `q` not free; a rounded virtual eye degenerate or out of range; an anchored
+/// walk that finds no start cylinder (a rounded range end that misses the object's sheet).
+pub fn ray_tree(
+    complex: &Complex,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    depth: usize,
+) -> Result<Vec<TreeInterval>, WalkError> {
+    let mut tree = Tree {
+        complex,
+        scene,
+        hops: Vec::new(),
+        branch: Vec::new(),
+    };
+    let mut leaves = Vec::new();
+    match tree.primary(q)? {
+        Ok(pieces) => {
+            for p in pieces {
+                tree.piece(q, depth, p, &mut leaves)?;
+            }
+        }
+        Err(object) => {
+            return Ok(alloc::vec![TreeInterval {
+                start: 0.0,
+                exact_start: None,
+                branch: object.into_iter().collect(),
+                start_vertex: None,
+            }])
+        }
+    }
+    Ok(tree.assemble(&leaves))
+}
+
+fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
+    let (ex, ey) = (
+        i128::from(b.x()) - i128::from(a.x()),
+        i128::from(b.y()) - i128::from(a.y()),
+    );
+    let (px, py) = (
+        i128::from(p.x()) - i128::from(a.x()),
+        i128::from(p.y()) - i128::from(a.y()),
+    );
+    Sign::of_i128(ex * py - ey * px)
+}
+
+fn cross(u: (i128, i128), v: (i128, i128)) -> i128 {
+    u.0 * v.1 - u.1 * v.0
+}
+
+fn diff(p: QueryPoint, e: QueryPoint) -> (i128, i128) {
+    (
+        i128::from(p.x()) - i128::from(e.x()),
+        i128::from(p.y()) - i128::from(e.y()),
+    )
+}
+
+impl Tree<'_, '_> {
+    fn point(&self, i: usize) -> Point {
+        self.scene.vertices().get(i).copied().unwrap_or_default()
+    }
+
+    fn qpoint(&self, i: usize) -> QueryPoint {
+        self.point(i).to_query()
+    }
+
+    fn toward(&self, eye: QueryPoint, v: usize) -> Dir {
+        Dir {
+            angle: Angle::from_query(eye, ranked(self.scene, v)),
+            vertex: Some((v, true)),
+        }
+    }
+
+    /// The primary pieces from a full walk, or the object seen all around if the view has
+    /// no boundary.
+    #[allow(clippy::type_complexity)]
+    fn primary(&self, q: QueryPoint) -> Result<Result<Vec<Piece>, Option<ObjectId>>, WalkError> {
+        let mut first: Option<Option<ObjectId>> = None;
+        let mut events: Vec<(Dir, Option<ObjectId>)> = Vec::new();
+        self.complex.walk_trace(self.scene, q, |s| {
+            let ceiling = self.complex.ceiling(s.cylinder);
+            match (first, s.vertex) {
+                (None, _) => first = Some(ceiling),
+                (Some(_), Some(v)) if s.ahead => events.push((
+                    Dir {
+                        angle: s.angle,
+                        vertex: Some((v, true)),
+                    },
+                    ceiling,
+                )),
+                _ => {}
+            }
+        })?;
+        let start_object = first.flatten();
+        // Events exactly at θ = 0 may be perturbed to just below 2π: move them to the front.
+        let at_zero = events
+            .iter()
+            .rev()
+            .take_while(|e| e.0.angle.cmp_exact(&Angle::ZERO) == Ordering::Equal)
+            .count();
+        let mut seen = match events.len().checked_sub(at_zero + 1) {
+            Some(k) if at_zero > 0 => events[k].1,
+            _ => start_object,
+        };
+        events.rotate_right(at_zero);
+        // Clusters of events on one exact ray where the object changes: (first, last, after).
+        let mut clusters: Vec<(Dir, Dir, Option<ObjectId>)> = Vec::new();
+        let mut i = 0;
+        while i < events.len() {
+            let mut j = i + 1;
+            while j < events.len()
+                && events[j].0.angle.cmp_exact(&events[i].0.angle) == Ordering::Equal
+            {
+                j += 1;
+            }
+            let after = events[j - 1].1;
+            if after != seen {
+                clusters.push((events[i].0, events[j - 1].0, after));
+                seen = after;
+            }
+            i = j;
+        }
+        if clusters.is_empty() {
+            return Ok(Err(start_object));
+        }
+        let n = clusters.len();
+        Ok(Ok((0..n)
+            .map(|k| {
+                let (first, last, after) = clusters[k];
+                Piece {
+                    from: last,
+                    to: clusters[(k + 1) % n].0,
+                    ceiling: after,
+                    boundary: self.event_boundary(q, &first),
+                }
+            })
+            .collect()))
+    }
+
+    /// The boundary made by a walk event at the current level.
+    fn event_boundary(&self, eye: QueryPoint, d: &Dir) -> Boundary {
+        let dir = d.angle.vector();
+        Boundary {
+            radians: self.map_back(eye, dir),
+            exact: self.hops.is_empty().then_some(d.angle),
+            rule: Rule {
+                hops: self.hops.clone(),
+                eye,
+                dir,
+                level: self.branch.len(),
+                fallback: d.vertex.map(|v| v.0),
+            },
+        }
+    }
+
+    /// The boundary where the hit (or exit) edge changes at vertex `v` seen from `eye`.
+    fn split_boundary(&self, eye: QueryPoint, v: usize) -> Boundary {
+        let d = self.toward(eye, v);
+        let dir = d.angle.vector();
+        Boundary {
+            radians: self.map_back(eye, dir),
+            exact: self.hops.is_empty().then_some(d.angle),
+            rule: Rule {
+                hops: self.hops.clone(),
+                eye,
+                dir,
+                level: self.branch.len(),
+                fallback: Some(v),
+            },
+        }
+    }
+
+    /// The primary angle (radians, `f64`) of the direction `dir` from `eye` at the current
+    /// level: intersect with each hop's edge line and continue from the previous eye.
+    fn map_back(&self, eye: QueryPoint, dir: (i128, i128)) -> f64 {
+        let d = self.map_dir(&self.hops, eye, dir);
+        let a = libm::atan2(d.1, d.0);
+        let tau = 2.0 * core::f64::consts::PI;
+        if a < 0.0 {
+            let a = a + tau;
+            if a >= tau {
+                0.0
+            } else {
+                a
+            }
+        } else {
+            a
+        }
+    }
+
+    /// The direction `dir` from `eye` after the hops `hops`, mapped back to a direction
+    /// from the first hop's `prev` eye (`f64`).
+    fn map_dir(&self, hops: &[Hop], eye: QueryPoint, dir: (i128, i128)) -> (f64, f64) {
+        let mut d = (dir.0 as f64, dir.1 as f64);
+        let mut cur = eye;
+        for hop in hops.iter().rev() {
+            let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
+            let e = diff(b, a);
+            let e = (e.0 as f64, e.1 as f64);
+            let n = diff(cur, a);
+            let n = (n.0 as f64, n.1 as f64);
+            let den = d.0 * e.1 - d.1 * e.0;
+            let u = if den == 0.0 {
+                0.5
+            } else {
+                (d.0 * n.1 - d.1 * n.0) / den
+            };
+            let ap = diff(a, hop.prev);
+            d = (ap.0 as f64 + u * e.0, ap.1 as f64 + u * e.1);
+            cur = hop.prev;
+        }
+        d
+    }
+
+    /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it
+    /// points at an endpoint of the hop's edge, otherwise through the hit point on the
+    /// edge's line, computed in `f64` and rounded to the query grid (it only places the
+    /// range end; the error is below the grid step).
+    fn map_end(&self, end: &Dir, hop: &Hop) -> Result<Dir, WalkError> {
+        if let Some((v, _)) = end.vertex {
+            if v == hop.a || v == hop.b {
+                return Ok(self.toward(hop.next, v));
+            }
+        }
+        let d = end.angle.vector();
+        let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
+        let e = diff(b, a);
+        let den = cross(d, e);
+        if den == 0 {
+            return Err(WalkError::Corrupt);
+        }
+        let u = cross(d, diff(hop.prev, a)) as f64 / den as f64;
+        let px = libm::round(a.x() as f64 + u * e.0 as f64) as i128;
+        let py = libm::round(a.y() as f64 + u * e.1 as f64) as i128;
+        let (mut vx, mut vy) = (px - i128::from(hop.next.x()), py - i128::from(hop.next.y()));
+        let lim = crate::geom::point::MAX_ABS_DIRECTION as i128;
+        while vx.abs() > lim || vy.abs() > lim {
+            vx /= 2;
+            vy /= 2;
+        }
+        let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
+        Ok(Dir {
+            angle: Angle::constant(dir),
+            vertex: None,
+        })
+    }
+
+    /// The cylinder with floor `m` containing the line through `eye` just after the range
+    /// start `from` (a scan over the cylinders: O(cylinders); the history's sheet-anchored
+    /// locate would make it logarithmic).
+    fn locate_floor(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        from: &Dir,
+    ) -> Result<CylinderId, WalkError> {
+        let angle = &from.angle;
+        let offset = |chain: Chain| {
+            let v = tangent_vertex(self.scene, chain.object, angle, chain.bound);
+            match angle.offset_cmp_query(eye, ranked(self.scene, v)) {
+                // Only the vertex defining `from` lies on the trace at `from`. Just after,
+                // turning counter-clockwise, the line through a point ahead of the eye
+                // falls below the trace, one behind rises above.
+                Sign::Zero => match from.vertex {
+                    Some((w, ahead)) if w == v => {
+                        if ahead {
+                            Sign::Negative
+                        } else {
+                            Sign::Positive
+                        }
+                    }
+                    _ => Sign::Zero,
+                },
+                s => s,
+            }
+        };
+        let contains = |w: Wall, left: bool| match self.complex.wall_angle(self.scene, w) {
+            None => true,
+            Some(a) if left => a.cmp_angle(angle) == Ordering::Less,
+            Some(a) => angle.cmp_angle(&a) == Ordering::Less,
+        };
+        self.complex
+            .cylinders()
+            .iter()
+            .enumerate()
+            .find(|(_, c)| {
+                c.floor == Some(m)
+                    && contains(c.left, true)
+                    && contains(c.right, false)
+                    && c.bottom.is_none_or(|b| offset(b) == Sign::Negative)
+                    && c.top.is_none_or(|t| offset(t) == Sign::Positive)
+            })
+            .and_then(|(i, _)| CylinderId::from_index(i))
+            .ok_or(WalkError::NoStart)
+    }
+
+    /// Walks `(from, to)` from `eye` anchored to the floor `m` and cuts it into pieces; the
+    /// first piece starts with `first`.
+    fn floor_pieces(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        from: &Dir,
+        to: &Dir,
+        first: Boundary,
+    ) -> Result<Vec<Piece>, WalkError> {
+        let start = self.locate_floor(eye, m, from)?;
+        let lap = if to.angle.cmp_angle(&from.angle) == Ordering::Greater {
+            0
+        } else {
+            1
+        };
+        let mut events: Vec<(Dir, Option<ObjectId>)> = Vec::new();
+        self.complex.walk_from(
+            self.scene,
+            eye,
+            Anchor::Floor(m),
+            start,
+            from.angle,
+            Some(Position {
+                lap,
+                angle: to.angle,
+            }),
+            &mut |s| {
+                if let Some(v) = s.vertex {
+                    events.push((
+                        Dir {
+                            angle: s.angle,
+                            vertex: Some((v, s.ahead)),
+                        },
+                        self.complex.ceiling(s.cylinder),
+                    ));
+                }
+            },
+        )?;
+        let mut seen = self.complex.ceiling(start);
+        let mut pieces = Vec::new();
+        let (mut cur_from, mut cur_boundary, mut end) = (*from, first, *to);
+        let mut i = 0;
+        while i < events.len() {
+            let mut j = i + 1;
+            while j < events.len()
+                && events[j].0.angle.cmp_exact(&events[i].0.angle) == Ordering::Equal
+            {
+                j += 1;
+            }
+            let d = events[i].0;
+            if d.angle.cmp_exact(&to.angle) == Ordering::Equal {
+                // On the closing ray: not inside the open range.
+                end = d;
+                break;
+            }
+            let after = events[j - 1].1;
+            if d.angle.cmp_exact(&from.angle) == Ordering::Equal {
+                // On the opening ray: part of the state at the start.
+                seen = after;
+                cur_from = events[j - 1].0;
+            } else if after != seen {
+                pieces.push(Piece {
+                    from: cur_from,
+                    to: d,
+                    ceiling: seen,
+                    boundary: cur_boundary,
+                });
+                cur_from = events[j - 1].0;
+                cur_boundary = self.event_boundary(eye, &d);
+                seen = after;
+            }
+            i = j;
+        }
+        pieces.push(Piece {
+            from: cur_from,
+            to: end,
+            ceiling: seen,
+            boundary: cur_boundary,
+        });
+        Ok(pieces)
+    }
+
+    /// Splits the range `(lo, hi)` seen from `eye` on `m` by the edges of `m` facing the eye
+    /// (`front`) or facing away (`!front`, the exit edges of a ray inside `m`): the pieces
+    /// in counter-clockwise order with their start and edge (global vertex indices).
+    fn split(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        lo: &Dir,
+        hi: &Dir,
+        first: Boundary,
+        front: bool,
+    ) -> Vec<(Dir, Dir, Boundary, (usize, usize))> {
+        let Some(obj) = self.scene.object(m) else {
+            return Vec::new();
+        };
+        let (f, n) = (obj.first_vertex(), obj.len());
+        let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
+        let mut out = Vec::new();
+        for k in 0..n {
+            let (ia, ib) = (f + k, f + (k + 1) % n);
+            let s = side(self.qpoint(ia), self.qpoint(ib), eye);
+            // Counter-clockwise from the eye a front edge spans b → a, a back edge a → b.
+            let (s0, s1) = match (front, s) {
+                (true, Sign::Negative) => (ib, ia),
+                (false, Sign::Positive) => (ia, ib),
+                _ => continue,
+            };
+            let (v0, v1) = (diff(self.qpoint(s0), eye), diff(self.qpoint(s1), eye));
+            let (start, boundary, sv) = if cross(lv, v0) > 0 {
+                (self.toward(eye, s0), self.split_boundary(eye, s0), v0)
+            } else {
+                (*lo, first.clone(), lv)
+            };
+            let (end, ev) = if cross(v1, hv) > 0 {
+                (self.toward(eye, s1), v1)
+            } else {
+                (*hi, hv)
+            };
+            if cross(sv, ev) > 0 {
+                out.push((start, end, boundary, (ia, ib)));
+            }
+        }
+        out.sort_by(|a, b| {
+            let c = cross(a.0.angle.vector(), b.0.angle.vector());
+            0.cmp(&c)
+        });
+        out
+    }
+
+    fn piece(
+        &mut self,
+        eye: QueryPoint,
+        depth: usize,
+        p: Piece,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        let Some(c) = p.ceiling else {
+            out.push(Leaf {
+                branch: self.branch.clone(),
+                boundary: p.boundary,
+            });
+            return Ok(());
+        };
+        let material = self.scene.object(c).ok_or(WalkError::Corrupt)?.material;
+        match material {
+            Material::Screen => {
+                for sp in self.floor_pieces(eye, c, &p.from, &p.to, p.boundary)? {
+                    self.piece(eye, depth, sp, out)?;
+                }
+                Ok(())
+            }
+            Material::Mirror if depth > 0 => self.mirror(eye, c, &p, depth, out),
+            Material::Refractive { eta } if depth > 0 => {
+                self.refractive(eye, c, eta, &p, depth, out)
+            }
+            _ => {
+                let mut branch = self.branch.clone();
+                branch.push(c);
+                out.push(Leaf {
+                    branch,
+                    boundary: p.boundary,
+                });
+                Ok(())
+            }
+        }
+    }
+
+    /// Walks the pieces of `(from, to)` seen from `eye` anchored to `m`, one level deeper.
+    #[allow(clippy::too_many_arguments)]
+    fn deeper(
+        &mut self,
+        eye: QueryPoint,
+        m: ObjectId,
+        from: &Dir,
+        to: &Dir,
+        first: Boundary,
+        depth: usize,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        self.branch.push(m);
+        let r = self
+            .floor_pieces(eye, m, from, to, first)
+            .and_then(|pieces| {
+                pieces
+                    .into_iter()
+                    .try_for_each(|sp| self.piece(eye, depth - 1, sp, out))
+            });
+        self.branch.pop();
+        r
+    }
+
+    fn mirror(
+        &mut self,
+        eye: QueryPoint,
+        m: ObjectId,
+        p: &Piece,
+        depth: usize,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        let level = self.branch.len();
+        for (lo, hi, boundary, (ia, ib)) in
+            self.split(eye, m, &p.from, &p.to, p.boundary.clone(), true)
+        {
+            let (a, b) = (self.point(ia), self.point(ib));
+            let e = optics::reflect(eye, a, b).ok_or(WalkError::EyeOutOfRange)?;
+            let (aq, bq) = (a.to_query(), b.to_query());
+            let (s0, s1) = (side(aq, bq, eye), side(aq, bq, e));
+            if s1 == Sign::Zero || s1 == s0 {
+                return Err(WalkError::DegenerateOptics { level });
+            }
+            let hop = Hop {
+                prev: eye,
+                a: ia,
+                b: ib,
+                next: e,
+                level: level + 1,
+            };
+            // Mirrors flip orientation: counter-clockwise from the image of `hi`.
+            let (from, to) = (self.map_end(&hi, &hop)?, self.map_end(&lo, &hop)?);
+            self.hops.push(hop);
+            let mut tmp = Vec::new();
+            let r = self.deeper(e, m, &from, &to, boundary.clone(), depth, &mut tmp);
+            self.hops.pop();
+            r?;
+            // Back to primary order: reversed, each leaf starting at its successor's start.
+            let k = tmp.len();
+            for i in 0..k {
+                out.push(Leaf {
+                    branch: core::mem::take(&mut tmp[k - 1 - i].branch),
+                    boundary: if i == 0 {
+                        boundary.clone()
+                    } else {
+                        tmp[k - i].boundary.clone()
+                    },
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn refractive(
+        &mut self,
+        eye: QueryPoint,
+        m: ObjectId,
+        eta: crate::scene::Eta,
+        p: &Piece,
+        depth: usize,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        let level = self.branch.len();
+        for (lo, hi, boundary, (ia, ib)) in
+            self.split(eye, m, &p.from, &p.to, p.boundary.clone(), true)
+        {
+            let (a, b) = (self.point(ia), self.point(ib));
+            let e1 = optics::refract(eye, a, b, eta, true).ok_or(WalkError::EyeOutOfRange)?;
+            let (aq, bq) = (a.to_query(), b.to_query());
+            let (s0, s1) = (side(aq, bq, eye), side(aq, bq, e1));
+            if s1 == Sign::Zero || s1 != s0 {
+                return Err(WalkError::DegenerateOptics { level });
+            }
+            let hop = Hop {
+                prev: eye,
+                a: ia,
+                b: ib,
+                next: e1,
+                // The inside stage hits the refractive object itself.
+                level,
+            };
+            let (from1, to1) = (self.map_end(&lo, &hop)?, self.map_end(&hi, &hop)?);
+            self.hops.push(hop);
+            let r = self.exits(e1, m, eta, &from1, &to1, boundary, depth, level, out);
+            self.hops.pop();
+            r?;
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn exits(
+        &mut self,
+        e1: QueryPoint,
+        m: ObjectId,
+        eta: crate::scene::Eta,
+        from1: &Dir,
+        to1: &Dir,
+        boundary: Boundary,
+        depth: usize,
+        level: usize,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        for (lo, hi, b2, (ja, jb)) in self.split(e1, m, from1, to1, boundary, false) {
+            let (a, b) = (self.point(ja), self.point(jb));
+            let e2 = optics::refract(e1, a, b, eta, false).ok_or(WalkError::EyeOutOfRange)?;
+            let (aq, bq) = (a.to_query(), b.to_query());
+            let (s0, s1) = (side(aq, bq, e1), side(aq, bq, e2));
+            if s1 == Sign::Zero || s1 != s0 {
+                return Err(WalkError::DegenerateOptics { level });
+            }
+            let hop = Hop {
+                prev: e1,
+                a: ja,
+                b: jb,
+                next: e2,
+                level: level + 1,
+            };
+            let (from, to) = (self.map_end(&lo, &hop)?, self.map_end(&hi, &hop)?);
+            self.hops.push(hop);
+            let r = self.deeper(e2, m, &from, &to, b2, depth, out);
+            self.hops.pop();
+            r?;
+        }
+        Ok(())
+    }
+
+    /// Merges neighbouring leaves with equal branches and resolves the boundary vertices.
+    fn assemble(&self, leaves: &[Leaf]) -> Vec<TreeInterval> {
+        let m = leaves.len();
+        let starts: Vec<usize> = (0..m)
+            .filter(|&i| leaves[(i + m - 1) % m].branch != leaves[i].branch)
+            .collect();
+        if starts.is_empty() {
+            return alloc::vec![TreeInterval {
+                start: 0.0,
+                exact_start: None,
+                branch: leaves.first().map(|l| l.branch.clone()).unwrap_or_default(),
+                start_vertex: None,
+            }];
+        }
+        let mut out: Vec<TreeInterval> = starts
+            .iter()
+            .map(|&i| {
+                let (left, right) = (&leaves[(i + m - 1) % m], &leaves[i]);
+                TreeInterval {
+                    start: right.boundary.radians,
+                    exact_start: right.boundary.exact,
+                    branch: right.branch.clone(),
+                    start_vertex: self.resolve(&right.boundary.rule, &left.branch, &right.branch),
+                }
+            })
+            .collect();
+        out.sort_by(|a, b| a.start.total_cmp(&b.start));
+        out
+    }
+
+    fn resolve(&self, rule: &Rule, left: &[ObjectId], right: &[ObjectId]) -> Option<usize> {
+        let stages = rule.hops.len();
+        for st in 0..=stages {
+            let (eye, level, origin) = match st.checked_sub(1).and_then(|i| rule.hops.get(i)) {
+                None => (rule.hops.first().map_or(rule.eye, |h| h.prev), 0, None),
+                Some(h) => (h.next, h.level, Some((h.a, h.b))),
+            };
+            let level = if st == stages { rule.level } else { level };
+            let exact = st == stages;
+            let d = self.map_dir(rule.hops.get(st..).unwrap_or(&[]), rule.eye, rule.dir);
+            let owners = [left.get(level), right.get(level)];
+            let mut best: Option<(f64, usize)> = None;
+            for (k, id) in owners.iter().enumerate() {
+                let Some(id) = id else { continue };
+                if k == 1 && owners[0] == Some(id) {
+                    continue;
+                }
+                let Some(obj) = self.scene.object(**id) else {
+                    continue;
+                };
+                for v in obj.first_vertex()..obj.first_vertex() + obj.len() {
+                    let w = diff(self.qpoint(v), eye);
+                    let (on, along) = if exact {
+                        let along = rule.dir.0 * w.0 + rule.dir.1 * w.1;
+                        (cross(rule.dir, w) == 0, along as f64)
+                    } else {
+                        let wf = (w.0 as f64, w.1 as f64);
+                        let c = d.0 * wf.1 - d.1 * wf.0;
+                        let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
+                        (libm::fabs(c) <= 1e-10 * scale, d.0 * wf.0 + d.1 * wf.1)
+                    };
+                    if !on || along <= 0.0 || best.is_some_and(|(b, _)| b <= along) {
+                        continue;
+                    }
+                    if let Some((ia, ib)) = origin {
+                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
+                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
+                        if sw == Sign::Zero || sw == se {
+                            continue;
+                        }
+                    }
+                    best = Some((along, v));
+                }
+            }
+            if let Some((_, v)) = best {
+                return Some(v);
+            }
+        }
+        rule.fallback
+    }
+}
