@@ -558,15 +558,12 @@ fn bad_input_is_one_line_and_exit_2() {
         &["view", s, "--at", "-4.5,0", "--json"],
         &["inside object 2"],
     );
-    // --depth: only 0.
-    for d in ["1", "2", "-1", "x", ""] {
+    // --depth: a whole number from 0 to 16.
+    for d in ["17", "-1", "x", ""] {
         let line = fails(&["view", s, "--at", "0,0", "--depth", d], &[]);
         assert_eq!(
             line,
-            format!(
-                "error: --depth {d}: ray trees (mirrors, refraction, screens) are not \
-                 implemented yet; only depth 0"
-            )
+            format!("error: --depth {d}: the ray-tree depth must be a whole number from 0 to 16")
         );
     }
     // Malformed numbers.
@@ -625,4 +622,66 @@ fn bad_input_is_one_line_and_exit_2() {
         &["view", broken.to_str().unwrap(), "--at", "0,0"],
         &["broken.json"],
     );
+}
+
+/// `--depth D`: branches of at most D + 1 objects, primary first, no screens; the intervals
+/// cover the circle once; and each branch starts with what depth 0 sees there.
+#[test]
+fn ray_trees_extend_the_direct_view() {
+    for name in ["hall", "mixed"] {
+        let path = example(name);
+        let shown = screens(&path);
+        let direct = view(&path, "29.5,30.25", &[]);
+        for depth in ["1", "3"] {
+            let out = ok(&[
+                "view",
+                path.to_str().unwrap(),
+                "--at",
+                "29.5,30.25",
+                "--json",
+                "--depth",
+                depth,
+            ]);
+            let v: Value = serde_json::from_str(out.trim_end()).unwrap();
+            let rows = v["intervals"].as_array().unwrap();
+            let d: usize = depth.parse().unwrap();
+            assert!(rows.len() >= direct.len(), "{name} depth {depth}");
+            for (i, r) in rows.iter().enumerate() {
+                let p: Vec<u64> = r["path"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_u64().unwrap())
+                    .collect();
+                assert!(p.len() <= d + 1, "{name}: {r}");
+                assert!(
+                    p.iter().all(|o| !shown.contains(o)),
+                    "{name}: screen in {r}"
+                );
+                let next = &rows[(i + 1) % rows.len()];
+                assert_eq!(r["end"], next["start"], "{name}");
+                if rows.len() > 1 {
+                    assert_ne!(r["path"], next["path"], "{name}: neighbours");
+                }
+                // The primary object is what depth 0 sees in the middle of the interval.
+                let (s, e) = (r["start"].as_f64().unwrap(), r["end"].as_f64().unwrap());
+                let mid = (s + (e - s).rem_euclid(TAU) / 2.0).rem_euclid(TAU);
+                let seen = direct
+                    .iter()
+                    .find(|iv| {
+                        (mid - iv.start).rem_euclid(TAU)
+                            < (iv.end - iv.start)
+                                .rem_euclid(TAU)
+                                .max(if direct.len() == 1 { TAU } else { 0.0 })
+                    })
+                    .map(|iv| iv.path.clone())
+                    .unwrap();
+                assert_eq!(
+                    p.first().copied(),
+                    seen.first().copied(),
+                    "{name} depth {depth}: {r}"
+                );
+            }
+        }
+    }
 }

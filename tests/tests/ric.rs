@@ -146,7 +146,7 @@ fn seeded_builds_are_canonical() {
             &s,
             &vcx::partition::BuildOptions {
                 seed,
-                first: vec![],
+                ..Default::default()
             },
         )
         .unwrap();
@@ -184,7 +184,7 @@ fn history_locate_agrees_with_the_complex() {
             &s,
             &vcx::partition::BuildOptions {
                 seed,
-                first: vec![],
+                ..Default::default()
             },
         )
         .unwrap();

@@ -129,6 +129,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let options = BuildOptions {
         seed: args.seed,
         first,
+        ..Default::default()
     };
     let built = build_with(&args.scene, &scene, args.method, &options)?;
     let text = if args.stats_json {

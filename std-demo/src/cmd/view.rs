@@ -1,10 +1,14 @@
-//! `vcx view SCENE.json (--at X,Y | --at-file FILE) [--from DEG --to DEG] [--depth 0]
-//! [--json]`: what a viewpoint sees all around, as exact angular intervals.
+//! `vcx view SCENE.json (--at X,Y | --at-file FILE) [--from DEG --to DEG] [--depth D]
+//! [--json]`: what a viewpoint sees all around, as exact angular intervals, and with
+//! `--depth D` its ray tree through mirrors and refractive objects.
 //!
 //! The complex is built once per invocation (validated as by `vcx build`; a failure is
-//! internal, exit status 3) over the scene **without its screens**: views treat screens as
-//! transparent, so a screen is never seen and never bounds an interval. The view itself is
-//! exact ([`vcx::walk::view`]); floats appear only in the printed angles.
+//! internal, exit status 3). At depth 0 it is built over the scene **without its screens**:
+//! views treat screens as transparent, so a screen is never seen and never bounds an
+//! interval; the view is exact ([`vcx::walk::view`]). At depth D > 0 the complex includes
+//! the screens and [`vcx::walk::ray_tree`] walks through them; primary boundaries are
+//! exact, deeper ones are mapped back to primary angles in `f64`. Floats appear only in
+//! the printed angles.
 //!
 //! * `--at X,Y`: the viewpoint, as for `vcx locate` (decimal numbers rounded to the 2⁻³²
 //!   query grid, `|X|, |Y| ≤ 2²⁰`; a viewpoint on a bitangent or an edge's extension is
@@ -19,22 +23,23 @@
 //!   is `null` unless `from` is itself a boundary), the last ends at `to`, in order from
 //!   `from`. A boundary within 10⁻¹³ radian of `from` or `to` counts as lying on it
 //!   (degrees cannot be converted to radians exactly).
-//! * `--depth D`: the depth of the ray tree. Only `0` (what is seen directly) exists yet;
-//!   any other value is refused rather than ignored.
+//! * `--depth D`: the depth of the ray tree, 0 to 16: at most D reflections (mirrors) or
+//!   passes through refractive objects (tangent law, DESIGN.md §6) after the primary hit.
+//!   `path` then lists the objects along the ray, primary first, screens left out.
 //!
 //! Output with `--json`: one line per viewpoint, exactly
 //! `{"intervals": [{"start": rad, "end": rad, "path": [ids], "vertex": [object, vertex] |
 //! null}, …]}` — angles in radians in `[0, 2π)`, counter-clockwise from +x; the `end` of an
 //! interval is the `start` of the next, and the last one's `end` is the first one's `start`
 //! (for the full circle; with `--from/--to` it is `to`); `path` is `[object]`, or `[]` when
-//! the directions escape to infinity; `vertex` is the vertex causing the start boundary,
+//! the directions escape to infinity (at depth D: the branch, at most D + 1 objects); `vertex` is the vertex causing the start boundary,
 //! as `[object id, vertex id]` as written in the scene file, or `null` (a view with a
 //! single interval covering the full circle, or a clipped first interval). Without
 //! `--json`: a header line and a table in degrees per viewpoint, tables separated by a
 //! blank line.
 //!
 //! Errors (exit status 2, one `error: ` line): malformed or out-of-range numbers, an
-//! unreadable at-file or a bad line in it, `--depth` other than 0, and a viewpoint inside
+//! unreadable at-file or a bad line in it, a `--depth` that is not 0 to 16, and a viewpoint inside
 //! or on the boundary of an object — screens included, which the line names.
 
 use core::f64::consts::TAU;
@@ -42,7 +47,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 use vcx::partition::{point_in_scene, Location};
-use vcx::walk::{view, ViewInterval, WalkError};
+use vcx::walk::{ray_tree, view, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, QueryPoint, SceneRef, SubScene};
 use vcx_demo::SceneFile;
 
@@ -68,7 +73,8 @@ pub struct Args {
     /// End of the angular range, in degrees (with --from; equal to --from: full circle).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub to: Option<String>,
-    /// Ray-tree depth; only 0 (direct visibility) is implemented.
+    /// Ray-tree depth: 0 is what is seen directly; D follows up to D reflections or
+    /// refractions (screens are transparent).
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub depth: Option<String>,
     /// Print one JSON object per viewpoint instead of a table.
@@ -80,14 +86,15 @@ pub struct Args {
 const SNAP: f64 = 1e-13;
 
 /// One printed interval: angles in radians, ids as in the scene file.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Row {
     /// Start direction, radians in `[0, 2π)`.
     pub start: f64,
     /// End direction (the next row's start).
     pub end: f64,
-    /// The object seen (`None`: nothing).
-    pub object: Option<ObjectId>,
+    /// The branch of the ray tree: objects along the ray, primary first, screens left out
+    /// (one object or none at depth 0).
+    pub path: Vec<ObjectId>,
     /// The vertex causing the start boundary: (object id, written vertex id).
     pub vertex: Option<(ObjectId, usize)>,
 }
@@ -112,14 +119,17 @@ pub(crate) struct Viewpoint {
 
 /// Parses the arguments, builds the complex once, computes and prints every view.
 pub fn run(args: &Args) -> Result<(), Failure> {
-    if let Some(d) = &args.depth {
-        if d.trim().parse::<u64>() != Ok(0) {
-            return Err(Failure::bad_input(format!(
-                "--depth {d}: ray trees (mirrors, refraction, screens) are not implemented \
-                 yet; only depth 0"
-            )));
-        }
-    }
+    let depth = match &args.depth {
+        None => 0,
+        Some(d) => match d.trim().parse::<usize>() {
+            Ok(v) if v <= MAX_DEPTH => v,
+            _ => {
+                return Err(Failure::bad_input(format!(
+                    "--depth {d}: the ray-tree depth must be a whole number from 0 to {MAX_DEPTH}"
+                )))
+            }
+        },
+    };
     // Checked here rather than by clap so that the error stays one line.
     let range = match (&args.from, &args.to) {
         (Some(f), Some(t)) => Some(parse_range(f, t)?),
@@ -164,10 +174,29 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         .map(|(i, _)| ObjectId(i as u32));
     let sub = SubScene::new(scene, non_screen_ids);
     let sub_scene = sub.as_ref();
-    let built = build_checked(&args.scene, &sub_scene)?;
+    // Depth 0 walks the complex of the scene without its screens; ray trees need the
+    // screens in the complex (secondary walks continue behind them).
+    let built = if depth == 0 {
+        build_checked(&args.scene, &sub_scene)?
+    } else {
+        build_checked(&args.scene, &scene)?
+    };
 
     let mut text = String::new();
     for (i, p) in points.iter().enumerate() {
+        if depth > 0 {
+            let tree = ray_tree(&built.complex, &scene, p.q, depth).map_err(|e| Failure {
+                message: format!(
+                    "{}: internal: ray tree from {}: {e}",
+                    args.scene.display(),
+                    p.at
+                ),
+                code: EXIT_INTERNAL,
+            })?;
+            let full = tree_rows(&scene, &tree);
+            emit(args, &file, p, i, range, full, &mut text);
+            continue;
+        }
         let intervals = match view(&built.complex, &sub_scene, p.q) {
             Ok(v) => v,
             Err(WalkError::NotFree(l)) => {
@@ -194,21 +223,62 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             }
         };
         let full = full_rows(&scene, &sub, &intervals);
-        let rows = match range {
-            Some(r) => restrict(&full, r),
-            None => full,
-        };
-        if args.json {
-            text.push_str(&to_json(&rows).to_string());
-            text.push('\n');
-        } else {
-            if i > 0 {
-                text.push('\n');
-            }
-            text.push_str(&table(&args.scene, &file, &p.at, range, &rows));
-        }
+        emit(args, &file, p, i, range, full, &mut text);
     }
     write_stdout(&text)
+}
+
+/// Deepest ray tree the command computes.
+const MAX_DEPTH: usize = 16;
+
+/// Restricts the rows to the range and appends them as JSON or a table.
+fn emit(
+    args: &Args,
+    file: &SceneFile,
+    p: &Viewpoint,
+    i: usize,
+    range: Option<Range>,
+    full: Vec<Row>,
+    text: &mut String,
+) {
+    let rows = match range {
+        Some(r) => restrict(&full, r),
+        None => full,
+    };
+    if args.json {
+        text.push_str(&to_json(&rows).to_string());
+        text.push('\n');
+    } else {
+        if i > 0 {
+            text.push('\n');
+        }
+        text.push_str(&table(&args.scene, file, &p.at, range, &rows));
+    }
+}
+
+/// A branch for people: the objects along the ray joined by arrows, or "nothing".
+fn describe_path(file: &SceneFile, path: &[ObjectId]) -> String {
+    if path.is_empty() {
+        return describe(file, None);
+    }
+    path.iter()
+        .map(|&o| describe(file, Some(o)))
+        .collect::<Vec<_>>()
+        .join(" -> ")
+}
+
+/// A ray tree as rows in scene-file ids.
+fn tree_rows(scene: &SceneRef<'_>, tree: &[vcx::walk::TreeInterval]) -> Vec<Row> {
+    let n = tree.len();
+    tree.iter()
+        .enumerate()
+        .map(|(i, t)| Row {
+            start: t.start,
+            end: tree.get((i + 1) % n).map_or(t.start, |u| u.start),
+            path: t.branch.clone(),
+            vertex: t.start_vertex.and_then(|k| written_vertex(scene, k)),
+        })
+        .collect()
 }
 
 /// The failure for a viewpoint inside or on an object; an at-file line is named.
@@ -303,7 +373,7 @@ fn full_rows(scene: &SceneRef<'_>, sub: &SubScene<'_>, intervals: &[ViewInterval
         .map(|(i, v)| Row {
             start: starts[i],
             end: starts[(i + 1) % starts.len()],
-            object: v.object.and_then(|o| sub.original(o)),
+            path: v.object.and_then(|o| sub.original(o)).into_iter().collect(),
             vertex: v.start_vertex.and_then(|k| written_vertex(scene, k)),
         })
         .collect()
@@ -338,7 +408,7 @@ fn restrict(full: &[Row], r: Range) -> Vec<Row> {
     let mut rows = vec![Row {
         start: r.from,
         end: r.to,
-        object: full[first].object,
+        path: full[first].path.clone(),
         vertex: if on_boundary {
             full[first].vertex
         } else {
@@ -354,7 +424,7 @@ fn restrict(full: &[Row], r: Range) -> Vec<Row> {
         }
         rows.push(Row {
             end: r.to,
-            ..full[i]
+            ..full[i].clone()
         });
     }
     for i in 0..rows.len() - 1 {
@@ -371,7 +441,7 @@ pub fn to_json(rows: &[Row]) -> Value {
             json!({
                 "start": row.start,
                 "end": row.end,
-                "path": row.object.map_or_else(Vec::new, |o| vec![o.0]),
+                "path": row.path.iter().map(|o| o.0).collect::<Vec<u32>>(),
                 "vertex": row.vertex.map_or(Value::Null, |(o, v)| json!([o.0, v])),
             })
         })
@@ -413,7 +483,7 @@ fn table(path: &Path, file: &SceneFile, at: &str, range: Option<Range>, rows: &[
             "{:>12.6}  {:>12.6}  {:<24}  {vertex}",
             row.start.to_degrees(),
             row.end.to_degrees(),
-            describe(file, row.object),
+            describe_path(file, &row.path),
         )));
         out.push('\n');
     }
