@@ -498,7 +498,7 @@ mod tests {
         Row {
             start,
             end,
-            object: object.map(ObjectId),
+            path: object.map(ObjectId).into_iter().collect(),
             vertex: vertex.map(|v| (ObjectId(object.unwrap_or(0)), v)),
         }
     }
@@ -520,10 +520,10 @@ mod tests {
         assert_eq!(r.len(), 2);
         assert!((r[0].start - 330f64.to_radians()).abs() < 1e-15);
         assert_eq!(
-            (r[0].end, r[0].object, r[0].vertex),
+            (r[0].end, r[0].path.first().copied(), r[0].vertex),
             (a, Some(ObjectId(2)), None)
         );
-        assert_eq!((r[1].start, r[1].object), (a, Some(ObjectId(1))));
+        assert_eq!((r[1].start, r[1].path.first().copied()), (a, Some(ObjectId(1))));
         assert!((r[1].end - 90f64.to_radians()).abs() < 1e-15);
         // Starting on a boundary keeps its vertex; the full circle ends where it starts.
         let r = restrict(&full, range(b.to_degrees(), b.to_degrees()));
@@ -533,17 +533,17 @@ mod tests {
         // The full circle from inside an interval: it is cut in two.
         let r = restrict(&full, range(120.0, 120.0));
         assert_eq!(r.len(), 4);
-        assert_eq!((r[0].object, r[0].vertex), (Some(ObjectId(1)), None));
+        assert_eq!((r[0].path.first().copied(), r[0].vertex), (Some(ObjectId(1)), None));
         assert_eq!(
-            (r[3].start, r[3].object, r[3].vertex),
-            (a, full[0].object, full[0].vertex)
+            (r[3].start, r[3].path.first().copied(), r[3].vertex),
+            (a, full[0].path.first().copied(), full[0].vertex)
         );
         assert_eq!(r[3].end, r[0].start);
         assert!((r[0].start - 120f64.to_radians()).abs() < 1e-15);
         // A range inside one interval.
         let r = restrict(&full, range(100.0, 110.0));
         assert_eq!(r.len(), 1);
-        assert_eq!(r[0].object, Some(ObjectId(1)));
+        assert_eq!(r[0].path.first().copied(), Some(ObjectId(1)));
         // Ending on a boundary drops the empty interval after it.
         let r = restrict(&full, range(100.0, b.to_degrees()));
         assert_eq!(r.len(), 1);
