@@ -7,9 +7,10 @@
 //!   and depth, and the bytes of the arenas (cylinders, vertices, history links). One JSON
 //!   object per line.
 //! * `vcx bench views SCENE [--points FILE | --random K] [--seed S] [--repeat R]`: the
-//!   full 360° view from each point (screens left out, complex built once by the sweep):
-//!   median microseconds per view (each point timed as the best of R repetitions), views
-//!   per second, mean events (cylinders entered) and boundaries per view. One JSON object.
+//!   full 360° view from each point (screens left out, complex built once by the sweep),
+//!   or with `--depth D` the ray tree (screens kept): median microseconds per view (each
+//!   point timed as the best of R repetitions), views per second, mean events of the
+//!   primary walk (cylinders entered) and intervals per view. One JSON object.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -75,6 +76,9 @@ pub struct ViewsArgs {
     /// Repetitions per point; the best is kept.
     #[arg(long, default_value_t = 5)]
     pub repeat: u32,
+    /// Ray-tree depth (0: the direct view).
+    #[arg(long, default_value_t = 0)]
+    pub depth: usize,
 }
 
 /// Runs a benchmark.
@@ -166,7 +170,12 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         .enumerate()
         .filter(|(_, o)| o.material != Material::Screen)
         .map(|(i, _)| ObjectId(i as u32));
-    let sub = SubScene::new(full, keep);
+    // Depth 0 walks the complex without screens; ray trees need them in the complex.
+    let sub = if a.depth == 0 {
+        SubScene::new(full, keep)
+    } else {
+        SubScene::new(full, (0..full.len() as u32).map(ObjectId))
+    };
     let scene = sub.as_ref();
     let complex = build_by_sweep(&scene).map_err(internal)?;
     let points: Vec<QueryPoint> = match &a.points {
@@ -182,16 +191,25 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         if vcx::partition::point_in_scene(&full, q).is_some() {
             continue;
         }
+        let count = || -> Result<usize, Failure> {
+            Ok(if a.depth == 0 {
+                vcx::walk::view(&complex, &scene, q)
+                    .map_err(internal)?
+                    .len()
+            } else {
+                vcx::walk::ray_tree(&complex, &scene, q, a.depth)
+                    .map_err(internal)?
+                    .len()
+            })
+        };
         let mut best = f64::INFINITY;
+        let mut intervals = 0;
         for _ in 0..a.repeat.max(1) {
             let t = Instant::now();
-            let v = vcx::walk::view(&complex, &scene, q).map_err(internal)?;
+            intervals = core::hint::black_box(count()?);
             best = best.min(t.elapsed().as_secs_f64());
-            core::hint::black_box(&v);
         }
-        boundaries += vcx::walk::view(&complex, &scene, q)
-            .map_err(internal)?
-            .len();
+        boundaries += intervals;
         complex
             .walk_trace(&scene, q, |_| events += 1)
             .map_err(internal)?;
@@ -206,6 +224,7 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
     let line = json!({
         "scene": a.scene.display().to_string(),
         "objects": scene.len(),
+        "depth": a.depth,
         "cylinders": complex.cylinders().len(),
         "views": used,
         "us_per_view": median * 1e6,
