@@ -46,7 +46,7 @@ pub use borders::{Layer, Side};
 #[cfg(feature = "alloc")]
 pub use locate::{point_in_scene, Location};
 #[cfg(feature = "alloc")]
-pub use ric::{BuildOptions, History, HistoryStats};
+pub use ric::{Budget, BuildOptions, History, HistoryStats};
 #[cfg(feature = "alloc")]
 pub use sweep::build_by_sweep;
 #[cfg(feature = "alloc")]

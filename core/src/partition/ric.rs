@@ -23,13 +23,49 @@
 //! **History**: every cylinder that ever existed is a node; a destroyed cylinder links to
 //! the new cylinders overlapping it. Point location descends from the first cylinder,
 //! choosing at each node the child that contains the query.
+//!
+//! **Storage.** Cylinders (= history nodes), vertices and links live in flat arenas
+//! addressed by `u32` ids. A node is destroyed by exactly one insertion, so its children
+//! are all known when that insertion ends and are stored as one contiguous range of the
+//! link arena (sorted by id, which is creation order).
+//!
+//! **Border index.** The walk up the conflict chain asks for the live cylinder across an
+//! arc at θ. Each (chain, side, layer) has one `Vec` of entries sorted by left wall
+//! (addressed by a slot number, not a search tree), searched by bisection. Destroyed
+//! cylinders are not removed at once: they are skipped by their alive flag and a list is
+//! compacted when a quarter of it is dead.
+//!
+//! **Angles.** Every vertex keeps a direction key ([`Dir`]): a monotone integer
+//! pseudo-angle, then the exact direction vector. Comparing walls is one `u64` comparison,
+//! an exact `i128` cross product on a tie, and the perturbed [`Angle::cmp_angle`] only for
+//! exactly parallel directions. No floats anywhere.
+//!
+//! **Events.** Between events the chain changes only locally, so after an event it is
+//! rebuilt from the first cylinder that changed and spliced back onto the unchanged rest
+//! ([`History::chain_up`]). The bitangents of N with each object met are computed once
+//! per insertion. The replacement intervals derived from the chain carry the chain indices
+//! they cover, so each chain cylinder is linked to exactly the intervals over it.
+//!
+//! **Scratch.** The per-insertion state (the chain, the open replacement intervals, the
+//! per-conflict-cylinder pieces, recorded links, the bitangents of N with its neighbours)
+//! lives in [`Scratch`], a set of `Vec`s owned by the [`History`] and cleared — not freed —
+//! between insertions (no `bumpalo` arena: reused `Vec`s need no `unsafe`, no reset
+//! protocol and no feature), so after the first insertions the construction allocates
+//! only when an arena grows. Per-conflict-cylinder state is a sparse set (one `u32` per
+//! node, never cleared) instead of maps.
+//!
+//! **Budget.** [`BuildOptions::budget`] bounds live cylinders, history nodes and the
+//! estimated arena bytes ([`History::estimated_bytes`]); exceeding any of them returns
+//! [`ComplexError::CapacityExceeded`] — never an abort: the arenas also grow with
+//! `try_reserve` — and rolls the failed insertion back.
 
-use alloc::collections::{BTreeMap, BTreeSet};
 use alloc::vec::Vec;
 use core::cmp::Ordering;
+use core::mem::size_of;
 
 use super::borders::{Layer, Side};
 use super::{Complex, ComplexError, Cylinder, CylinderId, Vertex, VertexId, Wall};
+use crate::geom::predicates::Direction;
 use crate::geom::sos::{Angle, RankedPoint};
 use crate::geom::{QueryPoint, Sign};
 use crate::line_space::{
@@ -38,28 +74,99 @@ use crate::line_space::{
 };
 use crate::scene::{ObjectId, SceneRef};
 
-/// A wall position as an ordered key: θ = 0 first, then by angle.
+/// The direction vector of an angle with a monotone integer key, for fast exact
+/// comparisons.
+///
+/// `key` orders directions: bit 62 is the half-plane (0 for θ ∈ [0, π) under the
+/// perturbation, 1 for [π, 2π)), the low 61 bits are `⌊2⁶⁰·p⌋` for the "diamond"
+/// pseudo-angle `p = (s − x)/s` in the upper half and `(s + x)/s` in the lower one
+/// (`s = |x| + |y|`), which grows strictly with θ inside a half from 0 to 2. Floors of a
+/// strictly monotone function are monotone, so different keys decide the order exactly;
+/// equal keys fall back to the exact cross product of the vectors, and exactly parallel
+/// vectors to the perturbed [`Angle::cmp_angle`]. The key is never 0, which stands for the
+/// wall θ = 0 in the border index.
 #[derive(Clone, Copy, Debug)]
-struct WallKey(Option<Angle>);
+struct Dir {
+    key: u64,
+    /// `head − tail` on the query grid (|components| ≤ 2⁵³ in the documented range).
+    x: i64,
+    y: i64,
+    /// Whether `key`, `x` and `y` are valid (|components| ≤ 2⁶²); if not, only the
+    /// half-plane bit of `key` is.
+    fast: bool,
+}
 
-impl PartialEq for WallKey {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
+impl Dir {
+    fn of(angle: &Angle) -> Dir {
+        let pi = Angle::constant(Direction { x: -1, y: 0 });
+        // `cmp_angle` first orders by half-plane: θ < π exactly when θ is in the upper half.
+        let upper = angle.cmp_angle(&pi) == Ordering::Less;
+        let half: u64 = if upper { 0 } else { 1 << 62 };
+        let (x, y) = angle.vector();
+        const LIMIT: u64 = 1 << 62;
+        match (i64::try_from(x), i64::try_from(y)) {
+            (Ok(x), Ok(y))
+                if (x, y) != (0, 0) && x.unsigned_abs() <= LIMIT && y.unsigned_abs() <= LIMIT =>
+            {
+                // Bit budget: s ≤ 2⁶³, numerator ≤ 2s ≤ 2⁶⁴, shifted ≤ 2¹²⁴ < 2¹²⁷.
+                let s = x.unsigned_abs() as i128 + y.unsigned_abs() as i128;
+                let num = if upper { s - x as i128 } else { s + x as i128 };
+                let p = ((num << 60) / s) as u64; // ≤ 2⁶¹
+                Dir {
+                    key: (half | p) + 1,
+                    x,
+                    y,
+                    fast: true,
+                }
+            }
+            _ => Dir {
+                // Beyond the documented range: only the half-plane bit is used.
+                key: half + 1,
+                x: 0,
+                y: 0,
+                fast: false,
+            },
+        }
+    }
+
+    /// The order of [`Angle::cmp_angle`] when the integers decide it; `None` for exactly
+    /// parallel vectors in the same half-plane (the perturbation decides).
+    ///
+    /// Bit budget of the cross product: components ≤ 2⁶² (`fast`), products ≤ 2¹²⁴:
+    /// exact in `i128`.
+    #[inline]
+    fn cmp(&self, other: &Dir) -> Option<Ordering> {
+        if !(self.fast && other.fast) {
+            let (a, b) = (self.key >> 62, other.key >> 62);
+            return (a != b).then(|| a.cmp(&b));
+        }
+        if self.key != other.key {
+            return Some(self.key.cmp(&other.key));
+        }
+        let c = self.x as i128 * other.y as i128 - self.y as i128 * other.x as i128;
+        match c.cmp(&0) {
+            Ordering::Greater => Some(Ordering::Less),
+            Ordering::Less => Some(Ordering::Greater),
+            Ordering::Equal => None,
+        }
     }
 }
-impl Eq for WallKey {}
-impl PartialOrd for WallKey {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
+
+/// An angle θ with its fast comparison key.
+#[derive(Clone, Copy, Debug)]
+struct Key {
+    dir: Dir,
+    angle: Angle,
+    /// The vertex whose angle this is, if any (equal vertices: equal angles, at once).
+    vertex: Option<VertexId>,
 }
-impl Ord for WallKey {
-    fn cmp(&self, other: &Self) -> Ordering {
-        match (&self.0, &other.0) {
-            (None, None) => Ordering::Equal,
-            (None, Some(_)) => Ordering::Less,
-            (Some(_), None) => Ordering::Greater,
-            (Some(a), Some(b)) => a.cmp_angle(b),
+
+impl Key {
+    fn new(angle: Angle) -> Key {
+        Key {
+            dir: Dir::of(&angle),
+            angle,
+            vertex: None,
         }
     }
 }
@@ -71,16 +178,67 @@ enum Probe {
     Query(QueryPoint),
 }
 
-/// The floor, ceiling and arcs of a replacement interval.
-type Shape = (
-    Option<ObjectId>,
-    Option<ObjectId>,
-    Option<Chain>,
-    Option<Chain>,
-);
+/// The floor, ceiling and arcs of a replacement interval, packed into one integer whose
+/// order is that of the tuple `(floor, ceiling, bottom, top)` (`None` first): 32 bits per
+/// field, an object `o` as `o + 1`, a chain as `1 + 2·object + bound`. Object ids stay
+/// below 2³⁰ ([`History::insert`] checks), so every field fits.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug, Default)]
+struct Shape(u128);
 
-fn shape(c: &Cylinder) -> Shape {
-    (c.floor, c.ceiling, c.bottom, c.top)
+/// Objects a history can hold: [`Shape`] packs ids into 32-bit fields.
+const MAX_OBJECTS: usize = 1 << 30;
+
+impl Shape {
+    fn new(
+        floor: Option<ObjectId>,
+        ceiling: Option<ObjectId>,
+        bottom: Option<Chain>,
+        top: Option<Chain>,
+    ) -> Shape {
+        let object = |o: Option<ObjectId>| o.map_or(0, |o| (o.0 as u128 & 0xffff_ffff) + 1);
+        let chain = |c: Option<Chain>| {
+            c.map_or(0, |c| {
+                let bound = match c.bound {
+                    Bound::Lower => 0,
+                    Bound::Upper => 1,
+                };
+                1 + 2 * (c.object.0 as u128 & 0x7fff_ffff) + bound
+            })
+        };
+        Shape(object(floor) << 96 | object(ceiling) << 64 | chain(bottom) << 32 | chain(top))
+    }
+
+    fn of(c: &Cylinder) -> Shape {
+        Shape::new(c.floor, c.ceiling, c.bottom, c.top)
+    }
+
+    fn unpack(
+        self,
+    ) -> (
+        Option<ObjectId>,
+        Option<ObjectId>,
+        Option<Chain>,
+        Option<Chain>,
+    ) {
+        let field = |k: u32| ((self.0 >> (32 * k)) & 0xffff_ffff) as u32;
+        let object = |v: u32| v.checked_sub(1).map(ObjectId);
+        let chain = |v: u32| {
+            v.checked_sub(1).map(|v| Chain {
+                object: ObjectId(v / 2),
+                bound: if v % 2 == 0 {
+                    Bound::Lower
+                } else {
+                    Bound::Upper
+                },
+            })
+        };
+        (
+            object(field(3)),
+            object(field(2)),
+            chain(field(1)),
+            chain(field(0)),
+        )
+    }
 }
 
 /// Statistics of a construction.
@@ -94,15 +252,75 @@ pub struct HistoryStats {
     pub depth: usize,
 }
 
+/// Limits on what a construction may allocate (DESIGN.md §4: exceeding them is an error,
+/// never an abort).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Budget {
+    /// Live cylinders of the partition.
+    pub cylinders: usize,
+    /// History nodes: every cylinder that ever existed (the cylinder arena).
+    pub history_nodes: usize,
+    /// Estimated bytes of the arenas, as [`History::estimated_bytes`] counts them.
+    pub bytes: usize,
+}
+
+impl Budget {
+    /// No limit.
+    pub const UNLIMITED: Budget = Budget {
+        cylinders: usize::MAX,
+        history_nodes: usize::MAX,
+        bytes: usize::MAX,
+    };
+}
+
+/// Per-history-node bytes counted by [`History::estimated_bytes`]: the cylinder, its
+/// alive flag, its child range and its sparse-set slot.
+const NODE_BYTES: usize =
+    size_of::<Cylinder>() + size_of::<bool>() + size_of::<(u32, u32)>() + size_of::<u32>();
+/// Per-vertex bytes: the vertex and its direction key.
+const VERTEX_BYTES: usize = size_of::<Vertex>() + size_of::<Dir>();
+/// Per-link bytes.
+const LINK_BYTES: usize = size_of::<CylinderId>();
+/// Per border-index entry bytes.
+const ENTRY_BYTES: usize = size_of::<Entry>();
+/// An entry of the border index: a live cylinder and its left wall.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    /// The left wall's [`Dir::key`]; 0 for θ = 0 or when the key is not valid.
+    key: u64,
+    /// The left wall's vertex index; [`ZERO_WALL`] for θ = 0.
+    vertex: u32,
+    id: CylinderId,
+}
+
+/// [`Entry::vertex`] of the wall θ = 0 (vertex ids stay below it).
+const ZERO_WALL: u32 = u32::MAX;
+
+/// Border-index slots per object.
+const SLOTS: usize = 12;
+
 /// The partition under construction and its history.
 #[derive(Clone, Debug)]
 pub struct History {
+    /// The node arena: every cylinder that ever existed.
     cylinders: Vec<Cylinder>,
     alive: Vec<bool>,
-    children: Vec<Vec<CylinderId>>,
+    /// Children of node `i`: `links[start .. start + len]` for `kids[i] = (start, len)`.
+    kids: Vec<(u32, u32)>,
+    links: Vec<CylinderId>,
     vertices: Vec<Vertex>,
-    borders: BTreeMap<(Chain, Side, Layer, WallKey), CylinderId>,
+    /// The direction of every vertex.
+    dirs: Vec<Dir>,
+    /// Live cylinders bordering each (chain, side, layer), sorted by left wall.
+    borders: Vec<Vec<Entry>>,
+    /// Entries of destroyed cylinders in each border list.
+    dead: Vec<u32>,
+    /// Entries in all border lists, live and dead.
+    entries: usize,
+    live: usize,
     order: Vec<ObjectId>,
+    budget: Option<Budget>,
+    scratch: Scratch,
 }
 
 /// A 64-bit PCG-style generator: enough for a reproducible shuffle, no dependency.
@@ -125,12 +343,51 @@ pub struct BuildOptions {
     /// Objects inserted first, in this order (the paper's screens first, §7); the rest
     /// follow in random order.
     pub first: Vec<ObjectId>,
+    /// Memory budget (`None`: unlimited).
+    pub budget: Option<Budget>,
 }
 
 impl Default for History {
     fn default() -> Self {
         History::new()
     }
+}
+
+/// The border-index slot of a (chain, side, layer).
+fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
+    let bound = match chain.bound {
+        Bound::Lower => 0,
+        Bound::Upper => 1,
+    };
+    let side = match side {
+        Side::Below => 0,
+        Side::Above => 1,
+    };
+    let layer = match layer {
+        Layer::Around => 0,
+        Layer::Before => 1,
+        Layer::After => 2,
+    };
+    ((chain.object.0 as usize * 2 + bound) * 2 + side) * 3 + layer
+}
+
+fn layer_of(c: &Cylinder, chain: Chain) -> Layer {
+    if c.ceiling == Some(chain.object) {
+        Layer::Before
+    } else if c.floor == Some(chain.object) {
+        Layer::After
+    } else {
+        Layer::Around
+    }
+}
+
+/// The border-index entries of a cylinder: its top arc seen from below, its bottom arc
+/// seen from above.
+fn border_slots(c: &Cylinder) -> [Option<usize>; 2] {
+    [
+        c.top.map(|t| slot(t, Side::Below, layer_of(c, t))),
+        c.bottom.map(|b| slot(b, Side::Above, layer_of(c, b))),
+    ]
 }
 
 impl History {
@@ -149,10 +406,17 @@ impl History {
         History {
             cylinders: alloc::vec![root],
             alive: alloc::vec![true],
-            children: alloc::vec![Vec::new()],
+            kids: alloc::vec![(0, 0)],
+            links: Vec::new(),
             vertices: Vec::new(),
-            borders: BTreeMap::new(),
+            dirs: Vec::new(),
+            borders: Vec::new(),
+            dead: Vec::new(),
+            entries: 0,
+            live: 1,
             order: Vec::new(),
+            budget: None,
+            scratch: Scratch::default(),
         }
     }
 
@@ -164,10 +428,16 @@ impl History {
             .collect();
         shuffle(&mut rest, options.seed);
         let mut h = History::new();
+        h.set_budget(options.budget);
         for id in options.first.iter().copied().chain(rest) {
             h.insert(scene, id)?;
         }
         Ok(h)
+    }
+
+    /// Sets (or removes) the memory budget checked by later insertions.
+    pub fn set_budget(&mut self, budget: Option<Budget>) {
+        self.budget = budget;
     }
 
     /// The insertion order used.
@@ -175,17 +445,78 @@ impl History {
         &self.order
     }
 
+    /// Number of live cylinders.
+    pub fn live_cylinders(&self) -> usize {
+        self.live
+    }
+
+    /// The estimate of the arena bytes that [`Budget::bytes`] limits: per history node
+    /// the [`Cylinder`], its alive flag, child range and sparse-set slot; 4 bytes per
+    /// link; per vertex the [`Vertex`] and its direction key; per border-index entry a
+    /// 16-byte entry, plus the index's per-object list headers. Not counted: the
+    /// spare capacity of the `Vec`s and the per-insertion scratch (linear in the size of
+    /// one insertion's conflict region).
+    pub fn estimated_bytes(&self) -> usize {
+        self.bytes_for(
+            self.cylinders.len(),
+            self.links.len(),
+            self.vertices.len(),
+            self.entries,
+        )
+    }
+
+    fn bytes_for(&self, nodes: usize, links: usize, vertices: usize, entries: usize) -> usize {
+        nodes
+            .saturating_mul(NODE_BYTES)
+            .saturating_add(links.saturating_mul(LINK_BYTES))
+            .saturating_add(vertices.saturating_mul(VERTEX_BYTES))
+            .saturating_add(entries.saturating_mul(ENTRY_BYTES))
+            .saturating_add(
+                self.borders
+                    .len()
+                    .saturating_mul(size_of::<Vec<Entry>>() + size_of::<u32>()),
+            )
+    }
+
+    /// Checks the budget for the given counts.
+    fn check(
+        &self,
+        live: usize,
+        nodes: usize,
+        links: usize,
+        vertices: usize,
+        entries: usize,
+    ) -> Result<(), ComplexError> {
+        let Some(b) = self.budget else { return Ok(()) };
+        let bytes = self.bytes_for(nodes, links, vertices, entries);
+        if live > b.cylinders || nodes > b.history_nodes || bytes > b.bytes {
+            return Err(ComplexError::CapacityExceeded {
+                cylinders: live,
+                history_nodes: nodes,
+                bytes,
+            });
+        }
+        Ok(())
+    }
+
+    /// The children of a node.
+    fn children(&self, id: CylinderId) -> &[CylinderId] {
+        self.kids
+            .get(id.index())
+            .and_then(|&(s, l)| self.links.get(s as usize..s as usize + l as usize))
+            .unwrap_or(&[])
+    }
+
     /// Size and depth of the history.
     pub fn stats(&self) -> HistoryStats {
-        let links = self.children.iter().map(Vec::len).sum();
         // Depth by dynamic programming over nodes in creation order (children are younger).
         let mut depth = alloc::vec![0usize; self.cylinders.len()];
         let mut max = 0;
         for i in 0..self.cylinders.len() {
-            for c in &self.children[i] {
-                let d = depth[i] + 1;
-                if d > depth[c.index()] {
-                    depth[c.index()] = d;
+            let d = depth[i] + 1;
+            for c in self.children(CylinderId(i as u32)) {
+                if let Some(x) = depth.get_mut(c.index()) {
+                    *x = (*x).max(d);
                 }
             }
             if self.alive[i] {
@@ -194,57 +525,69 @@ impl History {
         }
         HistoryStats {
             nodes: self.cylinders.len(),
-            links,
+            links: self.links.len(),
             depth: max,
         }
     }
 
     /// The live partition as a complex (cylinders and vertices renumbered).
     pub fn complex(&self, scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
-        let mut vmap: BTreeMap<VertexId, VertexId> = BTreeMap::new();
-        let mut cmap: BTreeMap<CylinderId, CylinderId> = BTreeMap::new();
-        for (i, _) in self
-            .cylinders
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| self.alive[*i])
-        {
-            let id = CylinderId::from_index(cmap.len()).ok_or(ComplexError::TooLarge)?;
-            cmap.insert(CylinderId(i as u32), id);
+        const NONE: u32 = u32::MAX;
+        let mut cmap = alloc::vec![NONE; self.cylinders.len()];
+        let mut count = 0usize;
+        for (i, m) in cmap.iter_mut().enumerate() {
+            if self.alive[i] {
+                *m = u32::try_from(count)
+                    .ok()
+                    .filter(|&k| k != NONE)
+                    .ok_or(ComplexError::TooLarge)?;
+                count += 1;
+            }
         }
-        let mut used: Vec<(Angle, VertexId)> = Vec::new();
+        let mut vmap = alloc::vec![NONE; self.vertices.len()];
+        let mut used: Vec<VertexId> = Vec::new();
         for (i, c) in self.cylinders.iter().enumerate() {
             if !self.alive[i] {
                 continue;
             }
             for w in [c.left, c.right] {
                 if let Wall::Vertex(v) = w {
-                    if !used.iter().any(|(_, u)| *u == v) {
-                        let b = self.vertices.get(v.index()).ok_or(ComplexError::TooLarge)?;
-                        used.push((b.bitangent.angle(scene), v));
+                    let m = vmap.get_mut(v.index()).ok_or(ComplexError::TooLarge)?;
+                    if *m == NONE {
+                        *m = 0;
+                        used.push(v);
                     }
                 }
             }
         }
-        used.sort_by(|a, b| a.0.cmp_angle(&b.0));
+        used.sort_by(|&a, &b| self.cmp_vertices(scene, a, b));
         let mut vertices = Vec::with_capacity(used.len());
-        for (k, (_, v)) in used.iter().enumerate() {
-            vmap.insert(*v, VertexId::from_index(k).ok_or(ComplexError::TooLarge)?);
+        for (k, &v) in used.iter().enumerate() {
+            vmap[v.index()] = u32::try_from(k).map_err(|_| ComplexError::TooLarge)?;
             vertices.push(self.vertices[v.index()]);
         }
         let wall = |w: Wall| match w {
             Wall::Zero => Wall::Zero,
-            Wall::Vertex(v) => vmap.get(&v).map_or(Wall::Zero, |&n| Wall::Vertex(n)),
+            Wall::Vertex(v) => match vmap.get(v.index()) {
+                Some(&n) if n != NONE => Wall::Vertex(VertexId(n)),
+                _ => Wall::Zero,
+            },
         };
-        let mut cylinders = Vec::with_capacity(cmap.len());
-        for (old, _) in &cmap {
-            let c = self.cylinders[old.index()];
+        let cyl = |n: Option<CylinderId>| match n.and_then(|n| cmap.get(n.index())) {
+            Some(&k) if k != NONE => Some(CylinderId(k)),
+            _ => None,
+        };
+        let mut cylinders = Vec::with_capacity(count);
+        for (i, c) in self.cylinders.iter().enumerate() {
+            if !self.alive[i] {
+                continue;
+            }
             cylinders.push(Cylinder {
                 left: wall(c.left),
                 right: wall(c.right),
-                left_neighbour: c.left_neighbour.and_then(|n| cmap.get(&n).copied()),
-                right_neighbour: c.right_neighbour.and_then(|n| cmap.get(&n).copied()),
-                ..c
+                left_neighbour: cyl(c.left_neighbour),
+                right_neighbour: cyl(c.right_neighbour),
+                ..*c
             });
         }
         let mut complex = Complex {
@@ -256,33 +599,129 @@ impl History {
         Ok(complex)
     }
 
-    fn wall_angle(&self, scene: &SceneRef<'_>, w: Wall) -> Option<Angle> {
+    /// The key of a vertex's angle.
+    fn vertex_key(&self, scene: &SceneRef<'_>, v: VertexId) -> Option<Key> {
+        Some(Key {
+            dir: *self.dirs.get(v.index())?,
+            angle: self.vertices.get(v.index())?.bitangent.angle(scene),
+            vertex: Some(v),
+        })
+    }
+
+    /// The order of vertex `v`'s angle against θ (`None`: no such vertex).
+    #[inline]
+    fn cmp_vertex(&self, scene: &SceneRef<'_>, v: VertexId, theta: &Key) -> Option<Ordering> {
+        let d = self.dirs.get(v.index())?;
+        if theta.vertex == Some(v) {
+            return Some(Ordering::Equal);
+        }
+        match d.cmp(&theta.dir) {
+            Some(o) => Some(o),
+            None => Some(
+                self.vertices
+                    .get(v.index())?
+                    .bitangent
+                    .angle(scene)
+                    .cmp_angle(&theta.angle),
+            ),
+        }
+    }
+
+    fn cmp_vertices(&self, scene: &SceneRef<'_>, a: VertexId, b: VertexId) -> Ordering {
+        if a == b {
+            return Ordering::Equal;
+        }
+        match (self.dirs.get(a.index()), self.dirs.get(b.index())) {
+            (Some(da), Some(db)) => da.cmp(db).unwrap_or_else(|| {
+                match (self.vertices.get(a.index()), self.vertices.get(b.index())) {
+                    (Some(x), Some(y)) => x
+                        .bitangent
+                        .angle(scene)
+                        .cmp_angle(&y.bitangent.angle(scene)),
+                    _ => a.cmp(&b),
+                }
+            }),
+            _ => a.cmp(&b),
+        }
+    }
+
+    /// The border-index entry of a cylinder with left wall `w`.
+    fn entry(&self, w: Wall, id: CylinderId) -> Entry {
         match w {
-            Wall::Zero => None,
+            Wall::Zero => Entry {
+                key: 0,
+                vertex: ZERO_WALL,
+                id,
+            },
+            Wall::Vertex(v) => Entry {
+                key: self
+                    .dirs
+                    .get(v.index())
+                    .filter(|d| d.fast)
+                    .map_or(0, |d| d.key),
+                vertex: v.0,
+                id,
+            },
+        }
+    }
+
+    /// Whether an entry's left wall lies at or before θ.
+    #[inline]
+    fn entry_at_or_before(&self, scene: &SceneRef<'_>, e: &Entry, theta: &Key) -> bool {
+        if e.vertex == ZERO_WALL {
+            return true;
+        }
+        if e.key != 0 && theta.dir.fast && e.key != theta.dir.key {
+            return e.key < theta.dir.key;
+        }
+        if theta.vertex.is_some_and(|v| v.0 == e.vertex) {
+            return true;
+        }
+        self.cmp_vertex(scene, VertexId(e.vertex), theta)
+            .is_none_or(|o| o != Ordering::Greater)
+    }
+
+    /// Order of two entries by left wall: θ = 0 first.
+    fn cmp_entries(&self, scene: &SceneRef<'_>, a: &Entry, b: &Entry) -> Ordering {
+        match (a.vertex == ZERO_WALL, b.vertex == ZERO_WALL) {
+            (true, true) => Ordering::Equal,
+            (true, false) => Ordering::Less,
+            (false, true) => Ordering::Greater,
+            (false, false) if a.key != 0 && b.key != 0 && a.key != b.key => a.key.cmp(&b.key),
+            (false, false) => self.cmp_vertices(scene, VertexId(a.vertex), VertexId(b.vertex)),
+        }
+    }
+
+    /// Whether a left wall lies at or before θ.
+    #[inline]
+    fn left_at_or_before(&self, scene: &SceneRef<'_>, w: Wall, theta: &Key) -> bool {
+        match w {
+            Wall::Zero => true,
             Wall::Vertex(v) => self
-                .vertices
-                .get(v.index())
-                .map(|v| v.bitangent.angle(scene)),
+                .cmp_vertex(scene, v, theta)
+                .is_none_or(|o| o != Ordering::Greater),
         }
     }
 
     /// Whether θ⁺ (just after θ) lies in the cylinder's θ-range.
-    fn spans(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Angle) -> bool {
-        let left = self
-            .wall_angle(scene, c.left)
-            .is_none_or(|l| l.cmp_angle(theta) != Ordering::Greater);
-        let right = self
-            .wall_angle(scene, c.right)
-            .is_none_or(|r| theta.cmp_angle(&r) == Ordering::Less);
-        left && right
+    #[inline]
+    fn spans(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key) -> bool {
+        let right = match c.right {
+            Wall::Zero => true,
+            Wall::Vertex(v) => self
+                .cmp_vertex(scene, v, theta)
+                .is_none_or(|o| o == Ordering::Greater),
+        };
+        right && self.left_at_or_before(scene, c.left, theta)
     }
 
     /// Whether the cylinder contains the line of direction θ⁺ through the probe, in the
     /// layer of the probe.
-    fn contains(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Angle, probe: Probe) -> bool {
+    fn contains(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key, probe: Probe) -> bool {
         if !self.spans(scene, c, theta) {
             return false;
         }
+        let theta = &theta.angle;
         let above = |chain: Chain| {
             let r = ranked(
                 scene,
@@ -304,18 +743,13 @@ impl History {
     }
 
     /// Descends the history to the live cylinder containing the probe's line at θ⁺.
-    fn locate_probe(
-        &self,
-        scene: &SceneRef<'_>,
-        theta: &Angle,
-        probe: Probe,
-    ) -> Option<CylinderId> {
+    fn locate_probe(&self, scene: &SceneRef<'_>, theta: &Key, probe: Probe) -> Option<CylinderId> {
         let mut cur = CylinderId::ZERO;
         for _ in 0..self.cylinders.len() {
             if *self.alive.get(cur.index())? {
                 return Some(cur);
             }
-            cur = *self.children.get(cur.index())?.iter().find(|&&k| {
+            cur = *self.children(cur).iter().find(|&&k| {
                 self.cylinders
                     .get(k.index())
                     .is_some_and(|c| self.contains(scene, c, theta, probe))
@@ -331,9 +765,9 @@ impl History {
         &self,
         scene: &SceneRef<'_>,
         q: QueryPoint,
-        d: crate::geom::predicates::Direction,
+        d: Direction,
     ) -> Option<(CylinderId, &Cylinder)> {
-        let id = self.locate_probe(scene, &Angle::constant(d), Probe::Query(q))?;
+        let id = self.locate_probe(scene, &Key::new(Angle::constant(d)), Probe::Query(q))?;
         Some((id, self.cylinders.get(id.index())?))
     }
 
@@ -344,158 +778,284 @@ impl History {
         chain: Chain,
         side: Side,
         layer: Layer,
-        theta: &Angle,
+        theta: &Key,
     ) -> Option<CylinderId> {
-        let hi = (chain, side, layer, WallKey(Some(*theta)));
-        let (k, id) = self.borders.range(..=hi).next_back()?;
-        (k.0 == chain && k.1 == side && k.2 == layer)
-            .then_some(*id)
-            .filter(|id| {
-                self.cylinders
-                    .get(id.index())
-                    .is_some_and(|c| self.spans(scene, c, theta))
-            })
-    }
-
-    fn border_keys(
-        &self,
-        scene: &SceneRef<'_>,
-        c: &Cylinder,
-    ) -> [Option<(Chain, Side, Layer, WallKey)>; 2] {
-        let key = WallKey(self.wall_angle(scene, c.left));
-        let layer = |chain: Chain| {
-            if c.ceiling == Some(chain.object) {
-                Layer::Before
-            } else if c.floor == Some(chain.object) {
-                Layer::After
-            } else {
-                Layer::Around
-            }
-        };
-        [
-            c.top.map(|t| (t, Side::Below, layer(t), key)),
-            c.bottom.map(|b| (b, Side::Above, layer(b), key)),
-        ]
+        let list = self.borders.get(slot(chain, side, layer))?;
+        // The last cylinder whose left wall lies at or before θ.
+        let k = list.partition_point(|e| self.entry_at_or_before(scene, e, theta));
+        // The last live one (destroyed cylinders stay in the lists until compaction).
+        let id = list
+            .get(..k)?
+            .iter()
+            .rev()
+            .map(|e| e.id)
+            .find(|id| self.alive.get(id.index()).is_some_and(|&a| a))?;
+        self.cylinders
+            .get(id.index())
+            .is_some_and(|c| self.spans(scene, c, theta))
+            .then_some(id)
     }
 
     fn push(&mut self, c: Cylinder) -> Result<CylinderId, ComplexError> {
         let id = CylinderId::from_index(self.cylinders.len()).ok_or(ComplexError::TooLarge)?;
+        self.check(
+            self.live,
+            self.cylinders.len() + 1,
+            self.links.len(),
+            self.vertices.len(),
+            self.entries,
+        )?;
+        if self.cylinders.try_reserve(1).is_err()
+            || self.alive.try_reserve(1).is_err()
+            || self.kids.try_reserve(1).is_err()
+        {
+            return Err(ComplexError::CapacityExceeded {
+                cylinders: self.live,
+                history_nodes: self.cylinders.len() + 1,
+                bytes: self.estimated_bytes().saturating_add(NODE_BYTES),
+            });
+        }
         self.cylinders.push(c);
         self.alive.push(false); // made live when the insertion commits
-        self.children.push(Vec::new());
+        self.kids.push((0, 0));
         Ok(id)
+    }
+
+    fn push_vertex(&mut self, bitangent: Bitangent, dir: Dir) -> Result<VertexId, ComplexError> {
+        let v = VertexId::from_index(self.vertices.len())
+            .filter(|v| v.0 != ZERO_WALL)
+            .ok_or(ComplexError::TooLarge)?;
+        self.check(
+            self.live,
+            self.cylinders.len(),
+            self.links.len(),
+            self.vertices.len() + 1,
+            self.entries,
+        )?;
+        if self.vertices.try_reserve(1).is_err() || self.dirs.try_reserve(1).is_err() {
+            return Err(ComplexError::CapacityExceeded {
+                cylinders: self.live,
+                history_nodes: self.cylinders.len(),
+                bytes: self.estimated_bytes().saturating_add(VERTEX_BYTES),
+            });
+        }
+        self.vertices.push(Vertex { bitangent });
+        self.dirs.push(dir);
+        Ok(v)
     }
 
     /// Inserts object `n` of `scene` (`Update Cylindrical Partition`). Objects not inserted
     /// are ignored by every predicate, so any subset can be built in any order.
+    ///
+    /// On an error (a budget exceeded, or a bug) the insertion is rolled back: the history
+    /// is the one before the call.
     pub fn insert(&mut self, scene: &SceneRef<'_>, n: ObjectId) -> Result<(), ComplexError> {
+        let mut s = core::mem::take(&mut self.scratch);
+        let (nodes, vertices) = (self.cylinders.len(), self.vertices.len());
+        s.begin(n, nodes, scene.len());
+        let result = self.insert_with(scene, &mut s);
+        if result.is_err() {
+            self.cylinders.truncate(nodes);
+            self.alive.truncate(nodes);
+            self.kids.truncate(nodes);
+            self.vertices.truncate(vertices);
+            self.dirs.truncate(vertices);
+        }
+        self.scratch = s;
+        result
+    }
+
+    fn insert_with(&mut self, scene: &SceneRef<'_>, s: &mut Scratch) -> Result<(), ComplexError> {
+        let n = s.n;
         let lost = |step: &'static str| ComplexError::InsertionLost {
             object: n.0 as usize,
             step,
         };
-        let zero = Angle::ZERO;
-        let start = ranked(scene, tangent_vertex(scene, n, &zero, Bound::Lower));
+        if scene.len() > MAX_OBJECTS {
+            return Err(ComplexError::TooLarge);
+        }
+        let need = scene.len().saturating_mul(SLOTS);
+        if self.borders.len() < need {
+            self.borders.resize_with(need, Vec::new);
+            self.dead.resize(need, 0);
+        }
+        let zero = Key::new(Angle::ZERO);
+        let start = ranked(scene, tangent_vertex(scene, n, &zero.angle, Bound::Lower));
         let i0 = self
             .locate_probe(scene, &zero, Probe::Vertex(start))
             .ok_or(lost("locate start"))?;
-        let mut ins = Insertion {
-            n,
-            chain: Vec::new(),
-            open: BTreeMap::new(),
-            created: Vec::new(),
-            ..Default::default()
+        let restart = Restart {
+            keep: 0,
+            fresh: i0,
+            tail_from: usize::MAX,
         };
-        ins.chain = self
-            .chain_up(scene, n, i0, &zero, None)
+        self.chain_up(scene, s, restart, &zero, None)
             .ok_or(lost("chain at 0"))?;
-        let shapes = derive(&self.cylinders, &ins.chain, n);
-        for &shape in &shapes {
+        core::mem::swap(&mut s.chain, &mut s.next);
+        derive(&self.cylinders, &s.chain, n, &mut s.derived);
+        for k in 0..s.derived.len() {
+            let shape = s.derived[k].0;
             let id = self.push(Cylinder::new(shape, Wall::Zero))?;
-            ins.open.insert(shape, id);
-            ins.created.push(id);
+            match s.open.binary_search_by(|(o, _)| o.cmp(&shape)) {
+                Ok(i) => s.open[i].1 = id,
+                Err(i) => s.open.insert(i, (shape, id)),
+            }
+            s.created.push(id);
         }
-        ins.record_children(self, &shapes);
-        let mut theta: Option<Angle> = None;
+        s.record_children();
+        let mut theta: Option<Key> = None;
 
         for _ in 0..4 * self.cylinders.len() + 16 {
-            let Some(event) = self.next_event(scene, &ins, theta.as_ref()) else {
+            let Some((mut angle, event)) = self.next_event(scene, s, theta.as_ref()) else {
                 break;
             };
-            let (angle, wall, crossing) = match event {
-                Event::Wall(w) => (
-                    self.wall_angle(scene, Wall::Vertex(w))
-                        .ok_or(lost("wall"))?,
-                    Wall::Vertex(w),
-                    None,
-                ),
+            let (wall, crossing) = match event {
+                Event::Wall(w) => (Wall::Vertex(w), None),
                 Event::Cross {
                     bitangent,
                     lower,
                     exit,
                 } => {
-                    let v =
-                        VertexId::from_index(self.vertices.len()).ok_or(ComplexError::TooLarge)?;
-                    self.vertices.push(Vertex { bitangent });
-                    (
-                        bitangent.angle(scene),
-                        Wall::Vertex(v),
-                        Some((bitangent, lower, exit)),
-                    )
+                    let v = self.push_vertex(bitangent, angle.dir)?;
+                    angle.vertex = Some(v);
+                    (Wall::Vertex(v), Some((bitangent, lower, exit)))
                 }
             };
-            // The chain just after the event.
-            let first = *ins.chain.first().ok_or(lost("empty chain"))?;
-            let i0 = match crossing {
+            // The chain just after the event, rebuilt only where it changed: below the
+            // first cylinder closing at the wall (or from the new bottom, or below the
+            // top) and up to an old chain cylinder that the event leaves alone.
+            let first = *s.chain.first().ok_or(lost("empty chain"))?;
+            let k = s.chain.len();
+            let restart = match crossing {
                 Some((b, true, (chain, side))) => {
                     let layer = layer_across(
                         chain,
                         side,
-                        n_after(scene, n, chain.object, &angle, Some(&b)),
+                        n_after(scene, n, chain.object, &angle.angle, Some(&b)),
                     );
-                    self.across(scene, chain, side, layer, &angle)
-                        .ok_or(lost("across at crossing"))?
+                    let i0 = self
+                        .across(scene, chain, side, layer, &angle)
+                        .ok_or(lost("across at crossing"))?;
+                    Restart {
+                        keep: 0,
+                        fresh: i0,
+                        tail_from: 0,
+                    }
                 }
-                _ if self.cylinders[first.index()].right == wall => self.cylinders[first.index()]
-                    .right_neighbour
-                    .ok_or(lost("right neighbour"))?,
-                _ => first,
+                Some((_, false, _)) => Restart {
+                    keep: k.saturating_sub(1),
+                    fresh: first,
+                    tail_from: usize::MAX,
+                },
+                None => {
+                    let closing = |j: &usize| {
+                        s.chain
+                            .get(*j)
+                            .is_some_and(|c| self.cylinders[c.index()].right == wall)
+                    };
+                    let a = (0..k).find(closing);
+                    let b = (0..k).rev().find(closing);
+                    match (a, b) {
+                        (Some(0), Some(b)) => Restart {
+                            keep: 0,
+                            fresh: self.cylinders[first.index()]
+                                .right_neighbour
+                                .ok_or(lost("right neighbour"))?,
+                            tail_from: b + 1,
+                        },
+                        (Some(a), Some(b)) => Restart {
+                            keep: a,
+                            fresh: first,
+                            tail_from: b + 1,
+                        },
+                        _ => Restart {
+                            keep: 0,
+                            fresh: first,
+                            tail_from: usize::MAX,
+                        },
+                    }
+                }
             };
             let bitangent = crossing.map(|c| c.0);
-            let chain = self
-                .chain_up(scene, n, i0, &angle, bitangent.as_ref())
+            self.chain_up(scene, s, restart, &angle, bitangent.as_ref())
                 .ok_or(lost("chain up"))?;
-            self.step(&mut ins, chain, wall)?;
+            self.step(s, wall)?;
             theta = Some(angle);
         }
-        self.finish(scene, ins)
+        self.finish(scene, s)
     }
 
-    /// The chain of conflict cylinders at θ⁺ from `i0` (holding N's lower tangent line)
-    /// up to the one holding N's upper tangent line.
+    /// The chain of conflict cylinders at θ⁺ into `s.next`: `restart.keep` cylinders of the
+    /// current chain (or, if none, `restart.fresh`, holding N's lower tangent line), then
+    /// upward across top arcs to the one holding N's upper tangent line — or, on meeting a
+    /// cylinder of the current chain at index ≥ `restart.tail_from`, the rest of the
+    /// current chain from there.
+    ///
+    /// The splice is exact: a chain cylinder that the event does not close still spans θ⁺,
+    /// and the cylinder above it in the chain is decided by its top arc, the layer (the
+    /// order of N and the arc's object along the lines, which only changes where they have
+    /// no common transversal) and whether N's upper tangent line is above the arc (which
+    /// only changes at a bitangent of N and the arc's object, an upper crossing event).
     fn chain_up(
         &self,
         scene: &SceneRef<'_>,
-        n: ObjectId,
-        i0: CylinderId,
-        theta: &Angle,
+        s: &mut Scratch,
+        restart: Restart,
+        theta: &Key,
         event: Option<&Bitangent>,
-    ) -> Option<Vec<CylinderId>> {
-        let top_n = ranked(scene, tangent_vertex(scene, n, theta, Bound::Upper));
-        let mut out = alloc::vec![i0];
-        let mut cur = i0;
+    ) -> Option<()> {
+        let mut out = core::mem::take(&mut s.next);
+        out.clear();
+        let r = self.chain_into(scene, s, restart, theta, event, &mut out);
+        s.next = out;
+        r
+    }
+
+    fn chain_into(
+        &self,
+        scene: &SceneRef<'_>,
+        s: &Scratch,
+        restart: Restart,
+        theta: &Key,
+        event: Option<&Bitangent>,
+        out: &mut Vec<CylinderId>,
+    ) -> Option<()> {
+        let n = s.n;
+        // The index of a cylinder in the current chain, if it may start the spliced tail.
+        let tail = |c: CylinderId| {
+            s.position(c)
+                .filter(|&p| p >= restart.tail_from && s.chain.get(p) == Some(&c))
+        };
+        let mut cur = if restart.keep == 0 {
+            if let Some(p) = tail(restart.fresh) {
+                out.extend_from_slice(s.chain.get(p..)?);
+                return Some(());
+            }
+            out.push(restart.fresh);
+            restart.fresh
+        } else {
+            out.extend_from_slice(s.chain.get(..restart.keep)?);
+            *out.last()?
+        };
+        let angle = &theta.angle;
+        let top_n = ranked(scene, tangent_vertex(scene, n, angle, Bound::Upper));
         for _ in 0..self.cylinders.len() {
             let c = self.cylinders.get(cur.index())?;
-            let Some(top) = c.top else { return Some(out) };
-            let h = ranked(scene, tangent_vertex(scene, top.object, theta, top.bound));
-            if theta.offset_cmp_after(top_n, h) == Sign::Positive {
-                return Some(out);
+            let Some(top) = c.top else { return Some(()) };
+            let h = ranked(scene, tangent_vertex(scene, top.object, angle, top.bound));
+            if angle.offset_cmp_after(top_n, h) == Sign::Positive {
+                return Some(());
             }
             let layer = layer_across(
                 top,
                 Side::Above,
-                n_after(scene, n, top.object, theta, event),
+                n_after(scene, n, top.object, angle, event),
             );
             cur = self.across(scene, top, Side::Above, layer, theta)?;
+            if let Some(p) = tail(cur) {
+                out.extend_from_slice(s.chain.get(p..)?);
+                return Some(());
+            }
             out.push(cur);
         }
         None
@@ -506,124 +1066,214 @@ impl History {
     fn next_event(
         &self,
         scene: &SceneRef<'_>,
-        ins: &Insertion,
-        theta: Option<&Angle>,
-    ) -> Option<Event> {
-        let after = |a: &Angle| theta.is_none_or(|t| a.cmp_angle(t) == Ordering::Greater);
-        let mut best: Option<(Angle, Event)> = None;
-        let offer = |a: Angle, e: Event, best: &mut Option<(Angle, Event)>| {
-            if after(&a)
-                && best
-                    .as_ref()
-                    .is_none_or(|(b, _)| a.cmp_angle(b) == Ordering::Less)
-            {
-                *best = Some((a, e));
-            }
-        };
-        for &id in &ins.chain {
-            if let Wall::Vertex(w) = self.cylinders[id.index()].right {
-                if let Some(a) = self.wall_angle(scene, Wall::Vertex(w)) {
-                    offer(a, Event::Wall(w), &mut best);
-                }
-            }
-        }
+        s: &mut Scratch,
+        theta: Option<&Key>,
+    ) -> Option<(Key, Event)> {
         let ends = [
-            (ins.chain.first(), Bound::Lower),
-            (ins.chain.last(), Bound::Upper),
+            (s.chain.first().copied(), Bound::Lower),
+            (s.chain.last().copied(), Bound::Upper),
         ];
-        for (id, bound) in ends {
+        // The bitangents of N with the arcs' objects, computed once per insertion.
+        for (id, _) in ends {
             let Some(c) = id.and_then(|id| self.cylinders.get(id.index())) else {
                 continue;
             };
-            let right = self.wall_angle(scene, c.right);
-            for (arc, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
-                let Some(arc) = arc else { continue };
-                for b in bitangents(*scene, ins.n, arc.object) {
-                    let fits = (b.first_object == ins.n
-                        && b.first_bound == bound
-                        && b.second_bound == arc.bound)
-                        || (b.second_object == ins.n
-                            && b.second_bound == bound
-                            && b.first_bound == arc.bound);
-                    let a = b.angle(scene);
-                    if fits
-                        && right
-                            .as_ref()
-                            .is_none_or(|r| a.cmp_angle(r) == Ordering::Less)
-                    {
-                        let event = Event::Cross {
-                            bitangent: b,
-                            lower: bound == Bound::Lower,
-                            exit: (arc, side),
-                        };
-                        offer(a, event, &mut best);
+            for arc in [c.bottom, c.top].into_iter().flatten() {
+                s.bitangents_with(scene, arc.object);
+            }
+        }
+        // Candidates are compared by their integer keys; the perturbed angle is built
+        // only for exact ties.
+        let s = &*s;
+        let angle = |src: Src| match src {
+            Src::Vertex(v) => self
+                .vertices
+                .get(v.index())
+                .map(|x| x.bitangent.angle(scene)),
+            Src::Pool(i) => s.pool.get(i).map(|x| x.1.angle),
+        };
+        let cmp = |(da, a): (Dir, Src), (db, b): (Dir, Src)| -> Ordering {
+            if let (Src::Vertex(x), Src::Vertex(y)) = (a, b) {
+                if x == y {
+                    return Ordering::Equal;
+                }
+            }
+            da.cmp(&db).unwrap_or_else(|| match (angle(a), angle(b)) {
+                (Some(x), Some(y)) => x.cmp_angle(&y),
+                _ => Ordering::Equal,
+            })
+        };
+        let after = |(d, a): (Dir, Src)| {
+            theta.is_none_or(|t| {
+                if let Src::Vertex(v) = a {
+                    if t.vertex == Some(v) {
+                        return false;
+                    }
+                }
+                d.cmp(&t.dir)
+                    .unwrap_or_else(|| angle(a).map_or(Ordering::Equal, |x| x.cmp_angle(&t.angle)))
+                    == Ordering::Greater
+            })
+        };
+        let mut best: Option<((Dir, Src), Event)> = None;
+        let better = |c: (Dir, Src), best: &Option<((Dir, Src), Event)>| {
+            after(c)
+                && best
+                    .as_ref()
+                    .is_none_or(|(b, _)| cmp(c, *b) == Ordering::Less)
+        };
+        let vertex = |v: VertexId| self.dirs.get(v.index()).map(|&d| (d, Src::Vertex(v)));
+        for &id in &s.chain {
+            if let Wall::Vertex(w) = self.cylinders[id.index()].right {
+                if let Some(c) = vertex(w) {
+                    if better(c, &best) {
+                        best = Some((c, Event::Wall(w)));
                     }
                 }
             }
         }
-        best.map(|(_, e)| e)
+        for (id, bound) in ends {
+            let Some(c) = id.and_then(|id| self.cylinders.get(id.index())) else {
+                continue;
+            };
+            let right = match c.right {
+                Wall::Vertex(v) => vertex(v),
+                Wall::Zero => None,
+            };
+            for (arc, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
+                let Some(arc) = arc else { continue };
+                let range = s.cached(arc.object);
+                for i in range {
+                    let Some((b, a)) = s.pool.get(i) else { break };
+                    let fits = (b.first_object == s.n
+                        && b.first_bound == bound
+                        && b.second_bound == arc.bound)
+                        || (b.second_object == s.n
+                            && b.second_bound == bound
+                            && b.first_bound == arc.bound);
+                    let cand = (a.dir, Src::Pool(i));
+                    if fits
+                        && right.is_none_or(|r| cmp(cand, r) == Ordering::Less)
+                        && better(cand, &best)
+                    {
+                        let event = Event::Cross {
+                            bitangent: *b,
+                            lower: bound == Bound::Lower,
+                            exit: (arc, side),
+                        };
+                        best = Some((cand, event));
+                    }
+                }
+            }
+        }
+        let ((_, src), event) = best?;
+        let key = match src {
+            Src::Vertex(v) => self.vertex_key(scene, v)?,
+            Src::Pool(i) => s.pool.get(i)?.1,
+        };
+        Some((key, event))
     }
 
-    /// Moves the insertion to the chain after an event at `wall`.
-    fn step(
-        &mut self,
-        ins: &mut Insertion,
-        chain: Vec<CylinderId>,
-        wall: Wall,
-    ) -> Result<(), ComplexError> {
-        let derived = derive(&self.cylinders, &chain, ins.n);
-        let shapes: BTreeSet<Shape> = derived.iter().copied().collect();
-        let mut closers: Vec<CylinderId> = Vec::new();
-        let mut openers: Vec<CylinderId> = Vec::new();
-        // Replacement intervals that changed.
-        let gone: Vec<Shape> = ins
-            .open
-            .keys()
-            .filter(|s| !shapes.contains(s))
-            .copied()
-            .collect();
-        for s in gone {
-            if let Some(id) = ins.open.remove(&s) {
-                self.cylinders[id.index()].right = wall;
-                closers.push(id);
+    /// Moves the insertion to the chain `s.next` after an event at `wall`.
+    fn step(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
+        derive(&self.cylinders, &s.next, s.n, &mut s.derived);
+        s.shapes.clear();
+        s.shapes.extend(s.derived.iter().map(|d| d.0));
+        s.shapes.sort_unstable();
+        s.shapes.dedup();
+        s.closers.clear();
+        s.openers.clear();
+        // Replacement intervals that changed: close those gone, open the new ones (both in
+        // shape order).
+        let old = core::mem::take(&mut s.open);
+        let mut open = core::mem::take(&mut s.spare_open);
+        open.clear();
+        let (mut i, mut j) = (0, 0);
+        for _ in 0..old.len() + s.shapes.len() {
+            match (old.get(i), s.shapes.get(j)) {
+                (Some(&(so, id)), Some(&sn)) if so == sn => {
+                    open.push((so, id));
+                    i += 1;
+                    j += 1;
+                }
+                (Some(&(_, id)), None) => {
+                    self.cylinders[id.index()].right = wall;
+                    s.closers.push(id);
+                    i += 1;
+                }
+                (Some(&(so, id)), Some(&sn)) if so < sn => {
+                    self.cylinders[id.index()].right = wall;
+                    s.closers.push(id);
+                    i += 1;
+                }
+                (_, Some(&sn)) => {
+                    let id = self.push(Cylinder::new(sn, wall))?;
+                    open.push((sn, id));
+                    s.created.push(id);
+                    s.openers.push(id);
+                    j += 1;
+                }
+                (None, None) => break,
             }
         }
-        for s in shapes {
-            if let alloc::collections::btree_map::Entry::Vacant(e) = ins.open.entry(s) {
-                let id = self.push(Cylinder::new(s, wall))?;
-                e.insert(id);
-                ins.created.push(id);
-                openers.push(id);
-            }
-        }
+        s.open = open;
+        s.spare_open = old;
         // Old cylinders entering or leaving the conflict region between their walls keep
         // their geometry outside it, as new cylinders with a new wall.
-        let before: BTreeSet<CylinderId> = ins.chain.iter().copied().collect();
-        let after: BTreeSet<CylinderId> = chain.iter().copied().collect();
-        for &d in after.difference(&before) {
+        let stamp = s.next_stamp();
+        for k in 0..s.chain_dense.len() {
+            if let Some(st) = s.chain_dense.get(k).and_then(|&i| s.dense.get_mut(i)) {
+                st.before = stamp;
+            }
+        }
+        for k in 0..s.next.len() {
+            s.state(s.next[k]).after = stamp;
+        }
+        s.diff.clear();
+        for k in 0..s.next.len() {
+            let d = s.next[k];
+            if s.state(d).before != stamp {
+                s.diff.push(d);
+            }
+        }
+        s.diff.sort_unstable();
+        s.diff.dedup();
+        for k in 0..s.diff.len() {
+            let d = s.diff[k];
             let old = self.cylinders[d.index()];
             if old.left == wall {
                 continue; // opens at this very wall: nothing of it lies outside before
             }
-            let piece = match ins.remainder.remove(&d) {
+            let piece = match s.state(d).remainder.take() {
                 Some(p) => p, // left earlier, comes back now
                 None => {
                     let p = self.push(Cylinder {
                         right_neighbour: None,
                         ..old
                     })?;
-                    ins.created.push(p);
-                    ins.first_piece.insert(d, p);
-                    self.children[d.index()].push(p);
+                    s.created.push(p);
+                    s.state(d).first_piece = Some(p);
+                    s.firsts.push(d);
+                    s.links.push((d, p));
                     p
                 }
             };
             self.cylinders[piece.index()].right = wall;
             self.cylinders[piece.index()].right_neighbour = None;
-            ins.last_piece.remove(&d);
-            closers.push(piece);
+            s.state(d).last_piece = None;
+            s.closers.push(piece);
         }
-        for &d in before.difference(&after) {
+        s.diff.clear();
+        for k in 0..s.chain.len() {
+            let d = s.chain[k];
+            if s.state(d).after != stamp {
+                s.diff.push(d);
+            }
+        }
+        s.diff.sort_unstable();
+        s.diff.dedup();
+        for k in 0..s.diff.len() {
+            let d = s.diff[k];
             let old = self.cylinders[d.index()];
             if old.right == wall {
                 continue; // closes at this very wall
@@ -633,19 +1283,21 @@ impl History {
                 left_neighbour: None,
                 ..old
             })?;
-            ins.created.push(p);
-            ins.remainder.insert(d, p);
-            ins.last_piece.insert(d, p);
-            self.children[d.index()].push(p);
-            openers.push(p);
+            s.created.push(p);
+            let st = s.state(d);
+            st.remainder = Some(p);
+            st.last_piece = Some(p);
+            s.lasts.push(d);
+            s.links.push((d, p));
+            s.openers.push(p);
         }
         // Faces continuing across the wall keep their floor and ceiling.
-        for &c in &closers {
+        for &c in &s.closers {
             let (f, g) = (
                 self.cylinders[c.index()].floor,
                 self.cylinders[c.index()].ceiling,
             );
-            if let Some(&o) = openers.iter().find(|&&o| {
+            if let Some(&o) = s.openers.iter().find(|&&o| {
                 let oc = &self.cylinders[o.index()];
                 oc.floor == f && oc.ceiling == g && oc.left_neighbour.is_none()
             }) {
@@ -653,79 +1305,220 @@ impl History {
                 self.cylinders[o.index()].left_neighbour = Some(c);
             }
         }
-        ins.chain = chain;
-        ins.record_children(self, &derived);
+        core::mem::swap(&mut s.chain, &mut s.next);
+        s.record_children();
         Ok(())
     }
 
     /// Closes the insertion at θ = 2π: links across θ = 0 and to unchanged neighbours,
-    /// retires the conflict cylinders and makes the new ones live.
-    fn finish(&mut self, scene: &SceneRef<'_>, mut ins: Insertion) -> Result<(), ComplexError> {
+    /// retires the conflict cylinders and makes the new ones live. Everything that can
+    /// fail is decided before the first change to a cylinder that existed before.
+    fn finish(&mut self, scene: &SceneRef<'_>, s: &mut Scratch) -> Result<(), ComplexError> {
         let lost = |step: &'static str| ComplexError::InsertionLost {
-            object: ins.n.0 as usize,
+            object: s.n.0 as usize,
             step,
         };
-        // Replacement intervals still open continue across θ = 0 into those opened there.
-        let at_zero: BTreeMap<Shape, CylinderId> = ins
-            .created
-            .iter()
-            .filter(|id| self.cylinders[id.index()].left == Wall::Zero)
-            .map(|&id| (shape(&self.cylinders[id.index()]), id))
-            .collect();
-        for (s, id) in core::mem::take(&mut ins.open) {
-            let first = *at_zero.get(&s).ok_or(lost("wrap at zero"))?;
+        // Replacement intervals still open continue across θ = 0 into those opened there
+        // (the last created with that shape, as a map keyed by shape would keep).
+        s.diff.clear();
+        s.diff.extend(
+            s.created
+                .iter()
+                .copied()
+                .filter(|id| self.cylinders[id.index()].left == Wall::Zero),
+        );
+        for &(sh, id) in &s.open {
+            let first = *s
+                .diff
+                .iter()
+                .rev()
+                .find(|c| Shape::of(&self.cylinders[c.index()]) == sh)
+                .ok_or(lost("wrap at zero"))?;
             self.cylinders[id.index()].right_neighbour = Some(first);
             self.cylinders[first.index()].left_neighbour = Some(id);
         }
-        let destroyed = core::mem::take(&mut ins.destroyed);
+        s.open.clear();
         // The first piece of an old cylinder continues from its old left neighbour (or from
         // that neighbour's last piece); the last piece leads to the old right neighbour.
-        for (&d, &p) in &ins.first_piece {
+        s.firsts.sort_unstable();
+        s.firsts.dedup();
+        s.lasts.sort_unstable();
+        s.lasts.dedup();
+        s.plan.clear();
+        for &d in &s.firsts {
+            let Some(p) = s.get(d).and_then(|st| st.first_piece) else {
+                continue;
+            };
             // A cylinder born at a vertex (right wedge) has no left neighbour.
             let Some(l) = self.cylinders[d.index()].left_neighbour else {
                 continue;
             };
-            let l = if destroyed.contains(&l) {
-                *ins.last_piece.get(&l).ok_or(lost("first piece link"))?
-            } else {
-                l
+            let l = match s.get(l) {
+                Some(st) => st.last_piece.ok_or(lost("first piece link"))?,
+                None => l,
             };
-            self.cylinders[p.index()].left_neighbour = Some(l);
-            self.cylinders[l.index()].right_neighbour = Some(p);
+            s.plan.push((l, p)); // l then p
         }
-        for (&d, &p) in &ins.last_piece {
+        for &d in &s.lasts {
+            let Some(p) = s.get(d).and_then(|st| st.last_piece) else {
+                continue;
+            };
             let Some(r) = self.cylinders[d.index()].right_neighbour else {
                 continue;
             };
-            let r = if destroyed.contains(&r) {
-                *ins.first_piece.get(&r).ok_or(lost("last piece link"))?
-            } else {
-                r
+            let r = match s.get(r) {
+                Some(st) => st.first_piece.ok_or(lost("last piece link"))?,
+                None => r,
             };
-            self.cylinders[p.index()].right_neighbour = Some(r);
-            self.cylinders[r.index()].left_neighbour = Some(p);
+            s.plan.push((p, r)); // p then r
         }
-        for &d in &destroyed {
+        // The counts after this insertion, against the budget.
+        // (Destroyed cylinders' entries stay until their list is compacted: count them.)
+        let mut added = 0usize;
+        for &id in &s.created {
+            added += border_slots(&self.cylinders[id.index()])
+                .iter()
+                .flatten()
+                .count();
+        }
+        let entries = self.entries + added;
+        let live = (self.live + s.created.len()).saturating_sub(s.dense.len());
+        // Children: group the recorded links by parent (counting sort over the dense
+        // order), sorted by id and without repeats.
+        s.count.clear();
+        s.count.resize(s.dense.len() + 1, 0);
+        for &(d, _) in &s.links {
+            if let Some(&k) = s.sparse_index(d) {
+                s.count[k as usize + 1] += 1;
+            }
+        }
+        for k in 1..s.count.len() {
+            s.count[k] += s.count[k - 1];
+        }
+        s.grouped.clear();
+        s.grouped.resize(s.links.len(), CylinderId::ZERO);
+        s.fill.clear();
+        s.fill.extend_from_slice(&s.count);
+        for &(d, c) in &s.links {
+            if let Some(&k) = s.sparse_index(d) {
+                let at = &mut s.fill[k as usize];
+                s.grouped[*at as usize] = c;
+                *at += 1;
+            }
+        }
+        let mut total = 0usize;
+        for k in 0..s.dense.len() {
+            let g = &mut s.grouped[s.count[k] as usize..s.count[k + 1] as usize];
+            g.sort_unstable();
+            let mut last = None;
+            total += g
+                .iter()
+                .filter(|&&c| {
+                    let new = last != Some(c);
+                    last = Some(c);
+                    new
+                })
+                .count();
+        }
+        let links = self.links.len() + total;
+        if u32::try_from(links).is_err() {
+            return Err(ComplexError::TooLarge);
+        }
+        self.check(
+            live,
+            self.cylinders.len(),
+            links,
+            self.vertices.len(),
+            entries,
+        )?;
+        if self.links.try_reserve(total).is_err() {
+            return Err(ComplexError::CapacityExceeded {
+                cylinders: live,
+                history_nodes: self.cylinders.len(),
+                bytes: self.bytes_for(self.cylinders.len(), links, self.vertices.len(), entries),
+            });
+        }
+        // Commit.
+        for &(a, b) in &s.plan {
+            self.cylinders[a.index()].right_neighbour = Some(b);
+            self.cylinders[b.index()].left_neighbour = Some(a);
+        }
+        for k in 0..s.dense.len() {
+            let d = s.dense[k].id;
+            let start = self.links.len();
+            let mut last = None;
+            for &c in &s.grouped[s.count[k] as usize..s.count[k + 1] as usize] {
+                if last != Some(c) {
+                    self.links.push(c);
+                }
+                last = Some(c);
+            }
+            // Fits: checked against u32 above.
+            self.kids[d.index()] = (start as u32, (self.links.len() - start) as u32);
+        }
+        for k in 0..s.dense.len() {
+            let d = s.dense[k].id;
             self.alive[d.index()] = false;
-            let c = self.cylinders[d.index()];
-            for k in self.border_keys(scene, &c).into_iter().flatten() {
-                self.borders.remove(&k);
-            }
         }
-        for &id in &ins.created {
-            self.alive[id.index()] = true;
-            let c = self.cylinders[id.index()];
-            for k in self.border_keys(scene, &c).into_iter().flatten() {
-                self.borders.insert(k, id);
-            }
+        for k in 0..s.created.len() {
+            self.alive[s.created[k].index()] = true;
         }
-        self.order.push(ins.n);
+        self.update_borders(scene, s);
+        self.live = live;
+        self.order.push(s.n);
         Ok(())
+    }
+
+    /// Updates the border index at commit. Destroyed cylinders are only counted as dead
+    /// in their lists ([`History::across`] skips them by their alive flag); a list is
+    /// compacted when a quarter of it is dead, so it stays below 4/3 of its live size.
+    /// Created cylinders are inserted by bisection, after old
+    /// entries with an equal left wall.
+    fn update_borders(&mut self, scene: &SceneRef<'_>, s: &Scratch) {
+        for st in &s.dense {
+            if let Some(c) = self.cylinders.get(st.id.index()) {
+                for sl in border_slots(c).into_iter().flatten() {
+                    if let Some(d) = self.dead.get_mut(sl) {
+                        *d += 1;
+                    }
+                }
+            }
+        }
+        for &id in &s.created {
+            let Some(c) = self.cylinders.get(id.index()).copied() else {
+                continue;
+            };
+            for sl in border_slots(&c).into_iter().flatten() {
+                self.insert_border(scene, sl, self.entry(c.left, id));
+            }
+        }
+    }
+
+    fn insert_border(&mut self, scene: &SceneRef<'_>, sl: usize, e: Entry) {
+        let (Some(list), Some(dead)) = (self.borders.get_mut(sl), self.dead.get_mut(sl)) else {
+            return;
+        };
+        if *dead as usize * 4 > list.len() {
+            let before = list.len();
+            let alive = &self.alive;
+            list.retain(|x| alive.get(x.id.index()).is_some_and(|&a| a));
+            self.entries = self.entries.saturating_sub(before - list.len());
+            *dead = 0;
+        }
+        let Some(list) = self.borders.get(sl) else {
+            return;
+        };
+        let k = list.partition_point(|x| self.cmp_entries(scene, x, &e) != Ordering::Greater);
+        if let Some(list) = self.borders.get_mut(sl) {
+            list.insert(k, e);
+            self.entries += 1;
+        }
     }
 }
 
 impl Cylinder {
-    fn new((floor, ceiling, bottom, top): Shape, left: Wall) -> Cylinder {
+    fn new(shape: Shape, left: Wall) -> Cylinder {
+        let (floor, ceiling, bottom, top) = shape.unpack();
         Cylinder {
             floor,
             ceiling,
@@ -739,71 +1532,249 @@ impl Cylinder {
     }
 }
 
-/// The state of one insertion.
-#[derive(Default)]
-struct Insertion {
+/// How [`History::chain_up`] rebuilds the chain after an event.
+#[derive(Clone, Copy, Debug)]
+struct Restart {
+    /// Cylinders of the current chain kept at the bottom.
+    keep: usize,
+    /// The bottom cylinder when none is kept.
+    fresh: CylinderId,
+    /// Cylinders of the current chain from this index up may be spliced in unchanged.
+    tail_from: usize,
+}
+
+/// What one insertion knows about a conflict cylinder.
+#[derive(Clone, Copy, Debug)]
+struct Old {
+    id: CylinderId,
+    /// Event stamps of membership in the chain before / after the current event.
+    before: u32,
+    after: u32,
+    /// Pieces outside the conflict region: the one before the cylinder first entered the
+    /// chain, the open one after it left, and the last one.
+    first_piece: Option<CylinderId>,
+    remainder: Option<CylinderId>,
+    last_piece: Option<CylinderId>,
+    /// The last children recorded (to skip repeats cheaply).
+    recent: [Option<CylinderId>; 2],
+    /// Index in the current chain (valid when `generation` is the scratch's).
+    pos: u32,
+    generation: u32,
+}
+
+/// The state of one insertion, kept between insertions to reuse its allocations.
+#[derive(Clone, Debug, Default)]
+struct Scratch {
     n: ObjectId,
     /// Conflict cylinders at the current θ, upward in u.
     chain: Vec<CylinderId>,
-    /// Replacement intervals open at the current θ.
-    open: BTreeMap<Shape, CylinderId>,
+    /// Their indices in `dense`.
+    chain_dense: Vec<usize>,
+    /// The chain after the current event.
+    next: Vec<CylinderId>,
+    /// Replacement intervals open at the current θ, sorted by shape.
+    open: Vec<(Shape, CylinderId)>,
+    spare_open: Vec<(Shape, CylinderId)>,
+    /// The replacement intervals of the chain and the chain indices each covers.
+    derived: Vec<(Shape, usize, usize)>,
+    shapes: Vec<Shape>,
     /// Every cylinder created by this insertion.
     created: Vec<CylinderId>,
-    /// Every conflict cylinder seen.
-    destroyed: BTreeSet<CylinderId>,
-    /// Pieces of old cylinders outside the conflict region: the one before the cylinder
-    /// first entered the chain, the open one after it left, and the last one.
-    first_piece: BTreeMap<CylinderId, CylinderId>,
-    remainder: BTreeMap<CylinderId, CylinderId>,
-    last_piece: BTreeMap<CylinderId, CylinderId>,
+    closers: Vec<CylinderId>,
+    openers: Vec<CylinderId>,
+    diff: Vec<CylinderId>,
+    /// (destroyed cylinder, child) in the order recorded.
+    links: Vec<(CylinderId, CylinderId)>,
+    firsts: Vec<CylinderId>,
+    lasts: Vec<CylinderId>,
+    /// Neighbour links to make at commit: (left, right).
+    plan: Vec<(CylinderId, CylinderId)>,
+    count: Vec<u32>,
+    fill: Vec<u32>,
+
+    grouped: Vec<CylinderId>,
+    /// Every conflict cylinder seen (the destroyed ones), as a sparse set: `sparse[id]`
+    /// indexes `dense` when `dense[sparse[id]].id == id`. `sparse` is never cleared.
+    dense: Vec<Old>,
+    sparse: Vec<u32>,
+    stamp: u32,
+    /// Counts chain updates (for [`Old::pos`]).
+    generation: u32,
+    /// Per object: (insertion number, start, len) of its bitangents with N in `pool`.
+    bt_of: Vec<(u32, u32, u32)>,
+    pool: Vec<(Bitangent, Key)>,
+    insertion: u32,
 }
 
+// (A derive belongs with the type in `scene`; kept here where the construction needs it.)
+#[allow(clippy::derivable_impls)]
 impl Default for ObjectId {
     fn default() -> Self {
         ObjectId(0)
     }
 }
 
-impl Insertion {
-    /// Links every chain cylinder to the replacement intervals covering it now.
-    fn record_children(&mut self, h: &mut History, shapes: &[Shape]) {
-        let k = self.chain.len();
-        for (j, &d) in self.chain.iter().enumerate() {
-            self.destroyed.insert(d);
-            let f = h.cylinders[d.index()].floor;
-            let g = h.cylinders[d.index()].ceiling;
-            let n = Some(self.n);
-            for s in shapes {
-                // I₀ below N, I_k above N, and the (F, N) and (N, G) runs through j.
-                let covers = (j == 0
-                    && s.3
-                        == Some(Chain {
-                            object: self.n,
-                            bound: Bound::Lower,
-                        })
-                    && s.0 == f
-                    && s.1 == g)
-                    || (j + 1 == k
-                        && s.2
-                            == Some(Chain {
-                                object: self.n,
-                                bound: Bound::Upper,
-                            })
-                        && s.0 == f
-                        && s.1 == g)
-                    || (s.0 == f && s.1 == n)
-                    || (s.0 == n && s.1 == g);
-                if covers {
-                    if let Some(&id) = self.open.get(s) {
-                        let ch = &mut h.children[d.index()];
-                        if !ch.contains(&id) {
-                            ch.push(id);
-                        }
-                    }
+impl Scratch {
+    /// Clears the state for inserting `n` into a history of `nodes` nodes.
+    fn begin(&mut self, n: ObjectId, nodes: usize, objects: usize) {
+        self.n = n;
+        self.chain.clear();
+        self.next.clear();
+        self.open.clear();
+        self.derived.clear();
+        self.created.clear();
+        self.links.clear();
+        self.firsts.clear();
+        self.lasts.clear();
+        self.dense.clear();
+        if self.sparse.len() < nodes {
+            self.sparse.resize(nodes, 0);
+        }
+        self.pool.clear();
+        if self.bt_of.len() < objects {
+            self.bt_of.resize(objects, (0, 0, 0));
+        }
+        self.insertion = self.insertion.wrapping_add(1);
+        if self.insertion == 0 {
+            // Wrapped: forget every stamp.
+            self.bt_of.iter_mut().for_each(|e| e.0 = 0);
+            self.insertion = 1;
+        }
+    }
+
+    fn next_stamp(&mut self) -> u32 {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            for d in &mut self.dense {
+                d.before = 0;
+                d.after = 0;
+            }
+            self.stamp = 1;
+        }
+        self.stamp
+    }
+
+    fn sparse_index(&self, id: CylinderId) -> Option<&u32> {
+        self.sparse
+            .get(id.index())
+            .filter(|&&k| self.dense.get(k as usize).is_some_and(|o| o.id == id))
+    }
+
+    /// The index of `id` in the current chain.
+    fn position(&self, id: CylinderId) -> Option<usize> {
+        self.get(id)
+            .filter(|o| o.generation == self.generation)
+            .map(|o| o.pos as usize)
+    }
+
+    fn get(&self, id: CylinderId) -> Option<&Old> {
+        self.sparse_index(id)
+            .and_then(|&k| self.dense.get(k as usize))
+    }
+
+    /// The state of conflict cylinder `id`, created on first sight.
+    fn state(&mut self, id: CylinderId) -> &mut Old {
+        let k = self.state_index(id);
+        &mut self.dense[k]
+    }
+
+    /// The index in `dense` of conflict cylinder `id`, created on first sight.
+    fn state_index(&mut self, id: CylinderId) -> usize {
+        match self.sparse_index(id) {
+            Some(&k) => k as usize,
+            None => {
+                let k = self.dense.len();
+                if self.sparse.len() <= id.index() {
+                    self.sparse.resize(id.index() + 1, 0);
                 }
+                self.sparse[id.index()] = k as u32;
+                self.dense.push(Old {
+                    id,
+                    before: 0,
+                    after: 0,
+                    first_piece: None,
+                    remainder: None,
+                    last_piece: None,
+                    recent: [None; 2],
+                    pos: 0,
+                    generation: 0,
+                });
+                k
             }
         }
     }
+
+    /// Computes and caches the bitangents of N and `other` (once per insertion).
+    fn bitangents_with(&mut self, scene: &SceneRef<'_>, other: ObjectId) {
+        let Some(e) = self.bt_of.get(other.0 as usize) else {
+            return;
+        };
+        if e.0 == self.insertion {
+            return;
+        }
+        let start = self.pool.len();
+        for b in bitangents(*scene, self.n, other) {
+            self.pool.push((b, Key::new(b.angle(scene))));
+        }
+        let len = self.pool.len() - start;
+        if let Some(e) = self.bt_of.get_mut(other.0 as usize) {
+            *e = (self.insertion, start as u32, len as u32);
+        }
+    }
+
+    /// The range in `pool` of the cached bitangents of N and `other`.
+    fn cached(&self, other: ObjectId) -> core::ops::Range<usize> {
+        match self.bt_of.get(other.0 as usize) {
+            Some(&(i, s, l)) if i == self.insertion => s as usize..s as usize + l as usize,
+            _ => 0..0,
+        }
+    }
+
+    /// Links every chain cylinder to the replacement intervals covering it now: `I₀` to
+    /// the interval below N, `I_k` to the one above, and every `I_j` to the `(F, N)` and
+    /// `(N, G)` runs through `j` (as [`derive`] reports them).
+    fn record_children(&mut self) {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.dense.iter_mut().for_each(|d| d.generation = 0);
+            self.generation = 1;
+        }
+        let generation = self.generation;
+        self.chain_dense.clear();
+        for k in 0..self.chain.len() {
+            let i = self.state_index(self.chain[k]);
+            let st = &mut self.dense[i];
+            st.pos = k as u32;
+            st.generation = generation;
+            self.chain_dense.push(i);
+        }
+        for r in 0..self.derived.len() {
+            let (sh, lo, hi) = self.derived[r];
+            let Ok(pos) = self.open.binary_search_by_key(&sh, |e| e.0) else {
+                continue;
+            };
+            let id = self.open[pos].1;
+            for j in lo..=hi {
+                let Some(st) = self.chain_dense.get(j).and_then(|&i| self.dense.get_mut(i)) else {
+                    break;
+                };
+                if st.recent.contains(&Some(id)) {
+                    continue;
+                }
+                st.recent = [Some(id), st.recent[0]];
+                self.links.push((st.id, id));
+            }
+        }
+    }
+}
+
+/// Where a candidate event's angle comes from.
+#[derive(Clone, Copy, Debug)]
+enum Src {
+    /// An existing vertex.
+    Vertex(VertexId),
+    /// A cached bitangent of N (`Scratch::pool`).
+    Pool(usize),
 }
 
 /// An event of an insertion.
@@ -862,8 +1833,16 @@ fn n_after(
     v.unwrap_or(false)
 }
 
-/// The replacement intervals of a chain (module documentation).
-fn derive(cylinders: &[Cylinder], chain: &[CylinderId], n: ObjectId) -> Vec<Shape> {
+/// The replacement intervals of a chain (module documentation), each with the range of
+/// chain indices it covers, into `out`: the interval below N (index 0), the one above N
+/// (index k − 1), then the `(F, N)` runs and the `(N, G)` runs upward.
+fn derive(
+    cylinders: &[Cylinder],
+    chain: &[CylinderId],
+    n: ObjectId,
+    out: &mut Vec<(Shape, usize, usize)>,
+) {
+    out.clear();
     let lower = Some(Chain {
         object: n,
         bound: Bound::Lower,
@@ -872,21 +1851,32 @@ fn derive(cylinders: &[Cylinder], chain: &[CylinderId], n: ObjectId) -> Vec<Shap
         object: n,
         bound: Bound::Upper,
     });
-    let get = |id: &CylinderId| cylinders.get(id.index()).copied();
-    let mut out = Vec::new();
+    let get = |id: &CylinderId| cylinders.get(id.index());
     let (Some(first), Some(last)) = (chain.first().and_then(get), chain.last().and_then(get))
     else {
-        return out;
+        return;
     };
-    out.push((first.floor, first.ceiling, first.bottom, lower));
-    out.push((last.floor, last.ceiling, upper, last.top));
+    let k = chain.len();
+    out.push((
+        Shape::new(first.floor, first.ceiling, first.bottom, lower),
+        0,
+        0,
+    ));
+    out.push((
+        Shape::new(last.floor, last.ceiling, upper, last.top),
+        k - 1,
+        k - 1,
+    ));
     // Runs of equal floor give (F, N); runs of equal ceiling give (N, G).
     for before in [true, false] {
         let key = |c: &Cylinder| if before { c.floor } else { c.ceiling };
         let mut start = lower;
-        let members: Vec<Cylinder> = chain.iter().filter_map(get).collect();
-        for (j, c) in members.iter().enumerate() {
-            let next = members.get(j + 1);
+        let mut from = 0;
+        for j in 0..k {
+            let Some(c) = chain.get(j).and_then(get) else {
+                return;
+            };
+            let next = chain.get(j + 1).and_then(get);
             if next.is_none_or(|m| key(m) != key(c)) {
                 let end = if next.is_some() { c.top } else { upper };
                 let (f, g) = if before {
@@ -894,10 +1884,197 @@ fn derive(cylinders: &[Cylinder], chain: &[CylinderId], n: ObjectId) -> Vec<Shap
                 } else {
                     (Some(n), key(c))
                 };
-                out.push((f, g, start, end));
+                out.push((Shape::new(f, g, start, end), from, j));
                 start = c.top;
+                from = j + 1;
             }
         }
     }
-    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Point;
+    use crate::scene::{Material, Scene};
+
+    fn pt(x: i32, y: i32) -> Point {
+        Point::from_raw(x << 16, y << 16).unwrap()
+    }
+
+    fn scene() -> Scene {
+        let polys = [
+            alloc::vec![pt(0, 0), pt(4, 0), pt(0, 3)],
+            alloc::vec![pt(10, 1), pt(14, 2), pt(11, 5)],
+            alloc::vec![pt(3, 8), pt(7, 8), pt(7, 11), pt(3, 11)],
+        ];
+        Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap()
+    }
+
+    /// The integer keys agree with the perturbed order: vertex pairs of a small grid
+    /// (many exactly parallel and axis-parallel directions), constants, and θ = 0.
+    #[test]
+    fn direction_keys_agree_with_cmp_angle() {
+        let mut angles = alloc::vec![Angle::ZERO];
+        for (x, y) in [
+            (1, 0),
+            (-1, 0),
+            (0, 1),
+            (0, -1),
+            (3, -2),
+            (-7, -7),
+            (1 << 52, 1),
+        ] {
+            angles.push(Angle::constant(Direction { x, y }));
+        }
+        let pts: Vec<RankedPoint> = (0..16)
+            .map(|i| RankedPoint::vertex(pt(i % 4 - 1, i / 4 - 2), i as usize))
+            .collect();
+        for a in &pts {
+            for b in &pts {
+                if a.rank != b.rank {
+                    angles.push(Angle::of_pair(*a, *b));
+                }
+            }
+        }
+        let keys: Vec<Key> = angles.iter().map(|a| Key::new(*a)).collect();
+        let mut decided = 0;
+        for x in &keys {
+            for y in &keys {
+                let want = x.angle.cmp_angle(&y.angle);
+                if let Some(got) = x.dir.cmp(&y.dir) {
+                    assert_eq!(got, want, "{:?} {:?}", x.angle, y.angle);
+                    decided += 1;
+                }
+                if x.dir.key != y.dir.key {
+                    assert_eq!(x.dir.key.cmp(&y.dir.key), want);
+                }
+            }
+        }
+        assert!(decided > keys.len() * keys.len() / 2);
+    }
+
+    /// Packed shapes sort as the tuples they pack and unpack to them.
+    #[test]
+    fn shapes_pack_in_tuple_order() {
+        let objects = [
+            None,
+            Some(ObjectId(0)),
+            Some(ObjectId(1)),
+            Some(ObjectId(77)),
+        ];
+        let chains = [
+            None,
+            Some(Chain {
+                object: ObjectId(0),
+                bound: Bound::Upper,
+            }),
+            Some(Chain {
+                object: ObjectId(1),
+                bound: Bound::Lower,
+            }),
+            Some(Chain {
+                object: ObjectId(1),
+                bound: Bound::Upper,
+            }),
+        ];
+        let mut all = Vec::new();
+        for f in objects {
+            for g in objects {
+                for b in chains {
+                    for t in chains {
+                        all.push((f, g, b, t));
+                    }
+                }
+            }
+        }
+        for x in &all {
+            let p = Shape::new(x.0, x.1, x.2, x.3);
+            assert_eq!(p.unpack(), *x);
+            for y in &all {
+                assert_eq!(p.cmp(&Shape::new(y.0, y.1, y.2, y.3)), x.cmp(y));
+            }
+        }
+    }
+
+    #[test]
+    fn a_tiny_budget_is_an_error_and_a_large_one_is_not() {
+        let s = scene();
+        let s = s.as_ref();
+        let free = History::build(&s, &BuildOptions::default()).unwrap();
+        for budget in [
+            Budget {
+                cylinders: 5,
+                ..Budget::UNLIMITED
+            },
+            Budget {
+                history_nodes: 10,
+                ..Budget::UNLIMITED
+            },
+            Budget {
+                bytes: 1000,
+                ..Budget::UNLIMITED
+            },
+        ] {
+            let options = BuildOptions {
+                budget: Some(budget),
+                ..BuildOptions::default()
+            };
+            match History::build(&s, &options) {
+                Err(ComplexError::CapacityExceeded {
+                    cylinders,
+                    history_nodes,
+                    bytes,
+                }) => assert!(
+                    cylinders > budget.cylinders
+                        || history_nodes > budget.history_nodes
+                        || bytes > budget.bytes
+                ),
+                other => panic!("{budget:?}: {other:?}"),
+            }
+        }
+        let large = Budget {
+            cylinders: 10_000,
+            history_nodes: 10_000,
+            bytes: 10_000_000,
+        };
+        let h = History::build(
+            &s,
+            &BuildOptions {
+                budget: Some(large),
+                ..BuildOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(h.stats(), free.stats());
+        assert!(h.estimated_bytes() <= large.bytes);
+        assert_eq!(h.live_cylinders(), h.complex(&s).unwrap().cylinders().len());
+    }
+
+    #[test]
+    fn a_failed_insertion_is_rolled_back() {
+        let s = scene();
+        let s = s.as_ref();
+        let mut h = History::new();
+        h.insert(&s, ObjectId(0)).unwrap();
+        let before = h.stats();
+        let live = h.live_cylinders();
+        h.set_budget(Some(Budget {
+            history_nodes: h.stats().nodes + 1,
+            ..Budget::UNLIMITED
+        }));
+        assert!(matches!(
+            h.insert(&s, ObjectId(1)),
+            Err(ComplexError::CapacityExceeded { .. })
+        ));
+        assert_eq!((h.stats(), h.live_cylinders()), (before, live));
+        h.set_budget(None);
+        h.insert(&s, ObjectId(1)).unwrap();
+        h.insert(&s, ObjectId(2)).unwrap();
+        let want = History::build(&s, &BuildOptions::default()).unwrap();
+        assert_eq!(
+            h.complex(&s).unwrap().cylinders().len(),
+            want.complex(&s).unwrap().cylinders().len()
+        );
+    }
 }

@@ -41,6 +41,16 @@ pub enum ComplexError {
     },
     /// Counts break `cylinders = 3·objects + 1 + 3·vertices`.
     Count,
+    /// The construction needs more than its memory budget allows (or than the allocator
+    /// gives): what was needed so far when it stopped.
+    CapacityExceeded {
+        /// Live cylinders.
+        cylinders: usize,
+        /// History nodes (every cylinder that ever existed).
+        history_nodes: usize,
+        /// Estimated bytes of the arenas.
+        bytes: usize,
+    },
 }
 
 impl core::error::Error for ComplexError {}
@@ -66,6 +76,14 @@ impl core::fmt::Display for ComplexError {
                 write!(f, "inserting object {object}: conflict chain lost ({step})")
             }
             ComplexError::Count => write!(f, "cylinder count breaks 3n + 1 + 3V"),
+            ComplexError::CapacityExceeded {
+                cylinders,
+                history_nodes,
+                bytes,
+            } => write!(
+                f,
+                "construction exceeds its budget: {cylinders} cylinders, {history_nodes} history nodes, about {bytes} bytes"
+            ),
         }
     }
 }
