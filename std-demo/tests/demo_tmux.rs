@@ -2,11 +2,13 @@
 //! sent with `send-keys`, the screen read with `capture-pane`. Checked: the three panes and
 //! a status line with a non-zero frame rate, the view changing after a turn, `q` leaving a
 //! restored terminal (no alternate screen, cursor shown, canonical mode back), a panic
-//! also restoring it, a tiny terminal and a resize, a scene that fails to load.
+//! also restoring it, a tiny terminal and a resize, a scene that fails to load, `+` going
+//! to depth 1 (the status line says so and, in the hall of mirrors, the view changes).
 //!
 //! The tmux tests SKIP (with a message on stderr) when `tmux` is not installed. The
 //! headless tests need no terminal: the JSON statistics, and every frame's view against
-//! `vcx::walk::view` (and `vcx view`) at the same viewpoints.
+//! `vcx::walk::view` (and `vcx view`) at the same viewpoints, and at depth 3 every
+//! frame's ray tree against `vcx view --depth 3`.
 
 use core::sync::atomic::{AtomicUsize, Ordering};
 use core::time::Duration;
@@ -231,6 +233,76 @@ fn headless_views_agree_with_vcx_view() {
             );
         }
     }
+}
+
+#[test]
+fn headless_ray_trees_agree_with_vcx_view() {
+    // Depth 3 in the hall of mirrors: every frame's ray tree is `vcx view --depth 3`'s at
+    // the same viewpoint — branches and boundary vertices exactly, angles within 1e-9.
+    let scene = example("hall");
+    let v = headless(&[
+        scene.to_str().unwrap(),
+        "--frames",
+        "6",
+        "--depth",
+        "3",
+        "--per-frame",
+    ]);
+    assert_eq!(v["depth"], 3);
+    for key in ["view_us_mean", "render_us_mean", "events_per_frame_mean"] {
+        assert!(v[key].as_f64().unwrap() > 0.0, "{key}: {v}");
+    }
+    let frames = v["per_frame"].as_array().unwrap();
+    assert_eq!(frames.len(), 6);
+    let at: String = frames
+        .iter()
+        .map(|f| {
+            format!(
+                "{},{}\n",
+                f["x"].as_f64().unwrap(),
+                f["y"].as_f64().unwrap()
+            )
+        })
+        .collect();
+    let at_file = temp_file("hall-points.txt", &at);
+    let out = vcx(&[
+        "view",
+        scene.to_str().unwrap(),
+        "--at-file",
+        at_file.to_str().unwrap(),
+        "--depth",
+        "3",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), frames.len());
+    let mut deep = 0;
+    for (f, line) in frames.iter().zip(&lines) {
+        let view: Value = serde_json::from_str(line).unwrap();
+        let theirs = view["intervals"].as_array().unwrap();
+        let ours = f["view"].as_array().unwrap();
+        let at = format!("{},{}", f["x"], f["y"]);
+        assert_eq!(ours.len(), theirs.len(), "at {at}");
+        for (o, t) in ours.iter().zip(theirs) {
+            let (a, b) = (o["start"].as_f64().unwrap(), t["start"].as_f64().unwrap());
+            assert!((a - b).abs() < 1e-9, "at {at}: {o} vs {t}");
+            assert_eq!(o["branch"], t["path"], "at {at}: {o} vs {t}");
+            assert_eq!(o["vertex"], t["vertex"], "at {at}: {o} vs {t}");
+            let branch = o["branch"].as_array().unwrap();
+            assert!(branch.len() <= 4, "{o}");
+            assert_eq!(o["object"], branch.last().cloned().unwrap_or(Value::Null));
+            deep += usize::from(branch.len() > 1);
+        }
+    }
+    // The hall of mirrors is seen through its mirrors.
+    assert!(deep > 0);
 }
 
 #[test]
@@ -471,7 +543,10 @@ fn tmux_panes_status_turn_and_quit() {
     ] {
         assert!(screen.contains(part), "{part}:\n{screen}");
     }
-    assert!(screen.contains("not implemented"), "{screen}");
+    assert!(
+        screen.contains("depth 0: what is seen directly"),
+        "{screen}"
+    );
     assert_eq!(t.display("#{alternate_on}"), "1");
 
     // Turning left changes the heading and the view.
@@ -485,15 +560,39 @@ fn tmux_panes_status_turn_and_quit() {
 
     // Depth, pane toggles.
     t.keys(&["+"]);
-    t.wait("the depth message", |s| {
-        s.contains("depth > 0 not implemented yet")
+    t.wait("depth 1 in the status line", |s| {
+        s.contains("│ depth 1 │") && s.contains("depth 1: up to 1 reflection")
     });
+    t.keys(&["-"]);
+    t.wait("depth 0 again", |s| s.contains("│ depth 0 │"));
     t.keys(&["2"]);
     let s = t.wait("the map hidden", |s| !s.contains("┌ Map"));
     assert!(s.contains("┌ View") && s.contains("Dual space"), "{s}");
     t.keys(&["2"]);
     t.wait("the map back", |s| s.contains("┌ Map"));
 
+    t.keys(&["q"]);
+    t.assert_restored(0);
+}
+
+#[test]
+fn tmux_depth_changes_the_view() {
+    // In the hall of mirrors, `+` goes to depth 1: the status line says so and the view
+    // shows what the mirrors reflect.
+    let Some(t) = Tmux::start("depth", 150, 45) else {
+        return;
+    };
+    let hall = example("hall");
+    t.line(&demo_command(hall.to_str().unwrap()));
+    t.wait("a non-zero frame rate", |s| fps(s).is_some_and(|f| f > 0.0));
+    t.wait("depth 0", |s| s.contains("│ depth 0 │"));
+    let before = view_rows(&t.screen(true));
+    assert!(before.len() > 20, "{before:?}");
+    t.keys(&["+"]);
+    t.wait("depth 1 in the status line", |s| s.contains("│ depth 1 │"));
+    std::thread::sleep(Duration::from_millis(300));
+    let after = view_rows(&t.screen(true));
+    assert_ne!(before, after, "the view did not change at depth 1");
     t.keys(&["q"]);
     t.assert_restored(0);
 }

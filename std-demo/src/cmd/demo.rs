@@ -2,23 +2,34 @@
 //! the visibility complex in dual space (the paper's Fig. 20). Without SCENE, the
 //! built-in grid example (`vcx gen grid 64 --seed 1`).
 //!
-//! Keys: ↑/↓ or W/S move, ←/→ or A/D turn, +/- depth (only 0 exists yet), t screens in or
+//! Keys: ↑/↓ or W/S move, ←/→ or A/D turn, +/- ray-tree depth (0 to 5), t screens in or
 //! out of the complex, 1/2/3 show or hide the View, Map and Dual space panes, [ ] field of
 //! view, o load another scene, space pause a playback, q (or Control-C) quit.
 //!
 //! * `--trajectory FILE` replays `x,y,heading_deg` lines, `--circuit` the built-in circuit
 //!   (an ellipse around the middle of the scene); a key that moves takes over.
+//! * `--depth D` starts at ray-tree depth D (0 to 5). At depth 0 the View shows what is
+//!   seen directly ([`vcx::walk::view`] over the complex without screens, unless `t` or
+//!   `--screens`); at D > 0 it shows the ray tree ([`vcx::walk::ray_tree`] over the complex
+//!   of the whole scene, screens included, built once when first needed): each column in
+//!   the colour of what the ray finally hits, darker per bounce, framed by the colour of
+//!   the first mirror or refractive object; the Map draws the rays of a few columns
+//!   through their reflections.
 //! * `--frames N` stops after N frames. With `--headless`, nothing is shown: N frames of
 //!   the trajectory (default: the circuit) are computed and drawn into an off-screen
 //!   buffer of `--size WxH`, and the statistics are printed as one JSON object:
 //!   `frames`, `view_us_mean`/`view_us_median`/`view_us_max` (time in
-//!   `vcx::walk::view`), `render_us_mean` (drawing), `events_per_frame_mean`/`_max`
-//!   (walk steps of the trace), `active_cylinders_mean` (distinct cylinders entered per
+//!   `vcx::walk::view`, or `vcx::walk::ray_tree` at depth > 0), `render_us_mean`
+//!   (drawing), `events_per_frame_mean`/`_max` (walk steps of the primary trace over the
+//!   complex shown, at every depth), `active_cylinders_mean` (distinct cylinders entered per
 //!   frame), `cylinders_touched` (distinct over all frames), `cylinders`, `objects`,
 //!   `depth`, `screens_in_complex`, `trajectory`; with `--per-frame` also `per_frame`:
 //!   each frame's viewpoint (raw query-grid coordinates `x_raw`, `y_raw` and `x`, `y`),
 //!   `heading_deg`, `events`, `active_cylinders` and its view intervals
-//!   (`start` in radians, `object`, `start_vertex`).
+//!   (`start` in radians, `object` — the last object of the branch —, `branch` — the
+//!   objects along the ray, primary first, screens left out, as `path` of `vcx view
+//!   --depth D --json` —, `start_vertex` as a global index and `vertex` as
+//!   `[object, vertex]` written in the scene file, as in `vcx view`).
 //!
 //! Errors before the terminal is taken (a scene or trajectory that does not load or
 //! validate, a viewpoint inside an object, no terminal) are one `error: ` line, exit
@@ -35,9 +46,10 @@ use crossterm::terminal::{self, EnterAlternateScreen, LeaveAlternateScreen};
 use ratatui::backend::{CrosstermBackend, TestBackend};
 use ratatui::Terminal;
 use serde_json::{json, Value};
+use vcx::{ObjectId, SceneRef};
 use vcx_demo::demo::app::{App, Key};
 use vcx_demo::demo::trajectory::{self, Pose};
-use vcx_demo::demo::{ui, World};
+use vcx_demo::demo::{ui, World, MAX_DEPTH};
 
 use super::build::EXIT_INTERNAL;
 use super::{write_stdout, Failure};
@@ -68,6 +80,9 @@ pub struct Args {
     /// Field of view in degrees (20 to 180).
     #[arg(long, value_name = "DEG", default_value_t = 90.0)]
     pub fov: f64,
+    /// Ray-tree depth to start at (0 to 5; keys +/- change it).
+    #[arg(long, value_name = "D", default_value_t = 0)]
+    pub depth: usize,
     /// Start with the screens in the complex.
     #[arg(long)]
     pub screens: bool,
@@ -96,6 +111,12 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             args.max_fps
         )));
     }
+    if args.depth > MAX_DEPTH {
+        return Err(Failure::bad_input(format!(
+            "--depth {}: the demo's ray-tree depth must be from 0 to {MAX_DEPTH}",
+            args.depth
+        )));
+    }
     let world = match &args.scene {
         Some(path) => World::load(path, args.screens),
         None => World::builtin().and_then(|mut w| {
@@ -109,6 +130,14 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let poses = poses(args, &world)?;
     let mut app = App::new(world);
     app.fov_deg = args.fov;
+    if args.depth > 0 {
+        app.world.full_complex().map_err(|m| Failure {
+            message: m,
+            code: EXIT_INTERNAL,
+        })?;
+        app.depth = args.depth;
+        app.compute();
+    }
     if let Some((poses, name)) = poses {
         app.play(poses, name);
     }
@@ -215,7 +244,11 @@ fn headless(args: &Args, mut app: App) -> Result<(), Failure> {
                     json!({
                         "start": s.start_radians,
                         "object": s.object.map(|o| o.0),
+                        "branch": s.branch.iter().map(|o| o.0).collect::<Vec<_>>(),
                         "start_vertex": s.start_vertex,
+                        "vertex": s.start_vertex
+                            .and_then(|k| written_vertex(&app.world.scene(), k))
+                            .map(|(o, v)| json!([o.0, v])),
                     })
                 })
                 .collect();
@@ -246,7 +279,7 @@ fn headless(args: &Args, mut app: App) -> Result<(), Failure> {
         "objects": app.world.scene().len(),
         "cylinders": cylinders,
         "screens_in_complex": app.world.screens_in_complex,
-        "depth": 0,
+        "depth": app.depth,
         "trajectory": app.playback.as_ref().map(|p| p.name.clone()),
         "size": [w, h],
         "frames": n,
@@ -263,6 +296,19 @@ fn headless(args: &Args, mut app: App) -> Result<(), Failure> {
         out["per_frame"] = Value::Array(per_frame);
     }
     write_stdout(&format!("{out}\n"))
+}
+
+/// A global vertex index as `(object, vertex id as written in the scene file)`.
+fn written_vertex(scene: &SceneRef<'_>, k: usize) -> Option<(ObjectId, usize)> {
+    let objects = scene.objects();
+    let i = objects.partition_point(|o| o.first_vertex() + o.len() <= k);
+    let o = objects.get(i)?;
+    (o.first_vertex() <= k).then(|| {
+        (
+            ObjectId(i as u32),
+            o.written_vertex_id(k - o.first_vertex()),
+        )
+    })
 }
 
 /// Leaves raw mode and the alternate screen and shows the cursor; safe to call twice.

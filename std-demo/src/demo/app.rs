@@ -9,7 +9,7 @@ use std::time::Instant;
 use vcx::QueryPoint;
 
 use super::trajectory::Pose;
-use super::{compute_frame, FrameData, World};
+use super::{compute_frame, FrameData, World, MAX_DEPTH};
 
 /// A key, as far as the demo cares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,10 +40,16 @@ pub const PANE_NAMES: [&str; 3] = ["View", "Map", "Dual space"];
 /// How long a message stays in the status line.
 const MESSAGE_TIME: Duration = Duration::from_secs(5);
 
-/// The note shown when there is no message.
-pub const DEPTH_NOTE: &str = "depth 0 only: ray trees (mirror reflections, refraction, \
-     seeing through screens) are not implemented yet; mirrors and refractive objects are \
-     drawn as surfaces of their own colour";
+/// The note shown when there is no message, by depth.
+pub fn depth_note(depth: usize) -> &'static str {
+    if depth == 0 {
+        "depth 0: what is seen directly; mirrors and refractive objects are drawn as surfaces \
+         of their own colour (+ follows reflections and refractions)"
+    } else {
+        "ray tree: each column shows what the ray finally hits, darker per bounce, inside a \
+         band of the colour of the first mirror or refractive object; the map draws a few rays"
+    }
+}
 
 /// A path being replayed.
 #[derive(Clone, Debug)]
@@ -71,6 +77,8 @@ pub struct App {
     pub heading_deg: f64,
     /// Field of view in degrees.
     pub fov_deg: f64,
+    /// Ray-tree depth, 0 to [`MAX_DEPTH`] (keys +/-).
+    pub depth: usize,
     /// Which panes are shown: View, Map, Dual space.
     pub panes: [bool; 3],
     /// Margin of the dual pane's u-range around the trace, as a fraction of the scene's
@@ -100,6 +108,7 @@ impl App {
             y,
             heading_deg,
             fov_deg: 90.0,
+            depth: 0,
             panes: [true; 3],
             dual_zoom: 0.04,
             playback: None,
@@ -157,7 +166,7 @@ impl App {
                 "viewpoint ({}, {}) is out of range",
                 self.x, self.y
             )),
-            Some(q) => compute_frame(&self.world, q).map_err(|e| e.to_string()),
+            Some(q) => compute_frame(&self.world, q, self.depth),
         };
     }
 
@@ -247,10 +256,8 @@ impl App {
             Key::Down | Key::Char('s') | Key::Char('S') => self.walk(-step),
             Key::Left | Key::Char('a') | Key::Char('A') => self.turn(5.0),
             Key::Right | Key::Char('d') | Key::Char('D') => self.turn(-5.0),
-            Key::Char('+') | Key::Char('=') => {
-                self.say("depth > 0 not implemented yet: ray trees (reflection, refraction, screens) come later; depth stays 0");
-            }
-            Key::Char('-') | Key::Char('_') => self.say("depth is 0 already (primary rays only)"),
+            Key::Char('+') | Key::Char('=') => self.set_depth(self.depth + 1),
+            Key::Char('-') | Key::Char('_') => self.set_depth(self.depth.saturating_sub(1)),
             Key::Char('t') | Key::Char('T') => self.toggle_screens(),
             Key::Char(c @ '1'..='3') => {
                 let k = usize::from(c as u8 - b'1');
@@ -273,6 +280,36 @@ impl App {
             Key::Char(']') => self.set_fov(self.fov_deg + 10.0),
             _ => {}
         }
+    }
+
+    /// Sets the ray-tree depth (clamped to 0 to [`MAX_DEPTH`]) and recomputes.
+    pub fn set_depth(&mut self, depth: usize) {
+        let depth = depth.min(MAX_DEPTH);
+        if depth == self.depth {
+            self.say(if depth == 0 {
+                "depth is 0 already (primary rays only)".to_string()
+            } else {
+                format!("depth {MAX_DEPTH} is the deepest the demo shows")
+            });
+            return;
+        }
+        if depth > 0 {
+            if let Err(e) = self.world.full_complex() {
+                self.say(e);
+                return;
+            }
+        }
+        self.depth = depth;
+        self.compute();
+        self.say(match depth {
+            0 => "depth 0: primary rays only".to_string(),
+            d => format!(
+                "depth {d}: up to {d} reflection{} or refraction{} (the complex with screens: {} cylinders)",
+                if d == 1 { "" } else { "s" },
+                if d == 1 { "" } else { "s" },
+                self.world.full_complex().map_or(0, |c| c.cylinders().len())
+            ),
+        });
     }
 
     fn set_fov(&mut self, deg: f64) {
@@ -316,6 +353,16 @@ impl App {
             self.say(format!("blocked by {}", self.world.describe(o)));
             return;
         }
+        // Ray trees need the viewpoint outside the screens too.
+        if self.depth > 0 {
+            if let Some(o) = self.world.blocked_in_scene(q) {
+                self.say(format!(
+                    "blocked by {} (at depth > 0)",
+                    self.world.describe(o)
+                ));
+                return;
+            }
+        }
         self.x = nx;
         self.y = ny;
         self.compute();
@@ -341,8 +388,13 @@ impl App {
                 ));
                 return;
             }
+            let note = if self.depth == 0 {
+                "the depth-0 view stops at them (ray trees, +, see through)"
+            } else {
+                "the ray tree sees through them all the same"
+            };
             self.say(format!(
-                "{screens} screens in the complex ({} cylinders): the depth-0 view stops at them; seeing through needs ray trees (not implemented)",
+                "{screens} screens in the complex ({} cylinders): {note}",
                 self.world.complex.cylinders().len()
             ));
         } else {
@@ -426,10 +478,22 @@ mod tests {
     fn keys_for_depth_panes_prompt_and_quit() {
         let mut a = app();
         a.key(Key::Char('+'));
-        assert!(a
-            .message()
-            .unwrap()
-            .contains("depth > 0 not implemented yet"));
+        assert_eq!(a.depth, 1);
+        assert!(
+            a.message().unwrap().starts_with("depth 1"),
+            "{:?}",
+            a.message()
+        );
+        assert!(a.frame.as_ref().unwrap().depth == 1);
+        for _ in 0..10 {
+            a.key(Key::Char('+'));
+        }
+        assert_eq!(a.depth, MAX_DEPTH);
+        for _ in 0..10 {
+            a.key(Key::Char('-'));
+        }
+        assert_eq!(a.depth, 0);
+        assert_eq!(a.frame.as_ref().unwrap().depth, 0);
         a.key(Key::Char('2'));
         assert_eq!(a.panes, [true, false, true]);
         a.key(Key::Char('t'));

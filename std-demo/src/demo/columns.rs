@@ -7,6 +7,12 @@
 //! strictly inside — is then decided **exactly** by comparing those directions with the
 //! exact interval boundaries ([`Angle::cmp_exact`]). Only the covered fractions, the hit
 //! distances and the shading are computed in `f64`, for drawing.
+//!
+//! At depth > 0 the intervals are those of the ray tree: the primary boundaries are exact
+//! as above; a deeper boundary is known in `f64` only and is compared as the integer
+//! direction closest to it. A piece then shows the last object of its branch (what the ray
+//! finally hits, at the unfolded length of the ray's polyline, [`super::trace_branch`]),
+//! with the primary object and the number of bounces for the tint and the band.
 
 use core::cmp::Ordering;
 use core::f64::consts::TAU;
@@ -15,13 +21,21 @@ use vcx::geom::predicates::Direction;
 use vcx::geom::sos::Angle;
 use vcx::ObjectId;
 
-use super::{ray_polygon, FrameData, Seen, World};
+use super::{escapes, ray_polygon, trace_branch, FrameData, Seen, World};
 
 /// Part of a column that sees one object (or nothing).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Piece {
-    /// The object seen (id in the whole scene); `None`: nothing.
+    /// The object finally hit (id in the whole scene, the last of the branch); `None`:
+    /// nothing (or the ray escapes after a mirror or a refractive object).
     pub object: Option<ObjectId>,
+    /// The object hit first (the primary one), when the ray goes on from it (a mirror or a
+    /// refractive object at depth > 0); `None` otherwise.
+    pub first: Option<ObjectId>,
+    /// Objects the ray went through or bounced off before the last one (0 at depth 0).
+    pub bounces: usize,
+    /// Distance to the first hit (the primary object), for the band; infinite without one.
+    pub first_distance: f64,
     /// Fraction of the column's angular span covered, in `[0, 1]`.
     pub fraction: f64,
     /// Distance from the viewpoint to the hit along the column's central ray (or, for a
@@ -107,15 +121,23 @@ pub fn columns(world: &World, frame: &FrameData, heading: f64, fov: f64, n: usiz
         let mut pieces: Vec<Piece> = Vec::with_capacity(cuts.len());
         for (j, &(iv, from)) in cuts.iter().enumerate() {
             let to = cuts.get(j + 1).map_or(step, |c| c.1);
-            let object = view[iv].object;
+            let seen = &view[iv];
             let ray = if (from..=to).contains(&centre) {
                 centre
             } else {
                 (from + to) / 2.0
             };
-            let (distance, facing) = hit(world, object, q, lo_rad + ray);
+            let (object, first, bounces, distance, facing, first_distance) = if frame.depth == 0 {
+                let (d, f) = hit(world, seen.object, q, lo_rad + ray);
+                (seen.object, None, 0, d, f, d)
+            } else {
+                deep_hit(world, seen, frame.depth, q, lo_rad + ray)
+            };
             pieces.push(Piece {
                 object,
+                first,
+                bounces,
+                first_distance,
                 fraction: if step > 0.0 { (to - from) / step } else { 1.0 },
                 distance,
                 facing,
@@ -126,6 +148,58 @@ pub fn columns(world: &World, frame: &FrameData, heading: f64, fov: f64, n: usiz
         out.push(Column { pieces });
     }
     out
+}
+
+/// The final object, the first object (if the ray goes on), the bounces, the unfolded
+/// distance and facing of the final hit, and the distance of the first hit, along the
+/// ray from `q` at angle `a` following the branch of `seen`.
+fn deep_hit(
+    world: &World,
+    seen: &Seen,
+    depth: usize,
+    q: (f64, f64),
+    a: f64,
+) -> (Option<ObjectId>, Option<ObjectId>, usize, f64, f64, f64) {
+    let branch = &seen.branch;
+    let escaped = escapes(world, branch, depth);
+    let stages = trace_branch(world, q, a, branch, false, 0.0);
+    let length = |s: &super::Stage| (s.to.0 - s.from.0).hypot(s.to.1 - s.from.1);
+    let first_distance = stages.first().map_or(f64::INFINITY, length);
+    let bounces = if escaped {
+        branch.len()
+    } else {
+        branch.len().saturating_sub(1)
+    };
+    let first = (bounces > 0).then(|| branch.first().copied()).flatten();
+    if escaped || stages.is_empty() {
+        return (None, first, bounces, f64::INFINITY, 0.0, first_distance);
+    }
+    let total: f64 = stages.iter().map(length).sum::<f64>().max(1e-9);
+    let last = stages[stages.len() - 1];
+    let facing = match last.hit {
+        Some((o, e)) => {
+            let poly = &world.polygons[o.0 as usize];
+            let a0 = poly[e];
+            let a1 = poly[(e + 1) % poly.len()];
+            let (ex, ey) = (a1.0 - a0.0, a1.1 - a0.1);
+            let (dx, dy) = (last.to.0 - last.from.0, last.to.1 - last.from.1);
+            let n = ex.hypot(ey) * dx.hypot(dy);
+            if n > 0.0 {
+                ((ey * dx - ex * dy) / n).abs()
+            } else {
+                1.0
+            }
+        }
+        None => 0.5,
+    };
+    (
+        branch.last().copied(),
+        first,
+        bounces,
+        total,
+        facing,
+        first_distance,
+    )
 }
 
 /// Distance and facing of the hit of the ray from `q` at angle `a` with `object`.
@@ -161,7 +235,7 @@ mod tests {
         let world = World::builtin().unwrap();
         for (x, y) in [(40.1, 43.15), (9.0, 10.0), (70.3, 20.7), (-5.0, 40.0)] {
             let q = vcx::QueryPoint::from_f64(x, y).unwrap();
-            let frame = compute_frame(&world, q).unwrap();
+            let frame = compute_frame(&world, q, 0).unwrap();
             for (heading, fov, n) in [(1.0, 1.5, 97), (5.9, 3.0, 40), (0.0, 0.3, 7)] {
                 let cols = columns(&world, &frame, heading, fov, n);
                 assert_eq!(cols.len(), n);

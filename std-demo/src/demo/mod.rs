@@ -6,8 +6,9 @@
 //!
 //! * [`World`]: a scene, the subset of its objects the complex is built over (screens left
 //!   out unless asked for) and that complex; polygons in `f64` for drawing.
-//! * [`compute_frame`]: the exact view from a viewpoint ([`vcx::walk::view`], timed) and the
-//!   walk statistics of the same trace (events, cylinders entered).
+//! * [`compute_frame`]: the exact view from a viewpoint ([`vcx::walk::view`], timed) or, at
+//!   depth D > 0, its ray tree ([`vcx::walk::ray_tree`], timed), and the walk statistics of
+//!   the primary trace (events, cylinders entered) over the complex shown.
 //! * [`columns`]: the view turned into screen columns — which intervals cover each column
 //!   is decided exactly from the interval boundaries; the covered fractions and the hit
 //!   distances are `f64`, for drawing only.
@@ -16,8 +17,12 @@
 //! * [`app`]: the state of a session (viewpoint, panes, messages, playback) and its keys.
 //! * [`trajectory`]: trajectory files (`x,y,heading_deg` lines) and the built-in circuit.
 //!
-//! Depth 0 only: mirrors and refractive objects are drawn as surfaces of their own colour;
-//! ray trees (reflection, refraction, seeing through screens) are not implemented yet.
+//! Depth 0 to [`MAX_DEPTH`] (keys +/-). At depth 0 the complex is built over the scene
+//! without its screens (unless asked for with `t`) and mirrors and refractive objects are
+//! drawn as surfaces of their own colour. Ray trees (depth > 0) need the complex over the
+//! **whole** scene, screens included: it is built once, when first needed, and kept
+//! ([`World::full_complex`]); screens then never change the picture (secondary walks pass
+//! through them), and `t` only changes which complex the statistics and the dual pane show.
 
 pub mod app;
 pub mod columns;
@@ -25,6 +30,7 @@ pub mod raster;
 pub mod trajectory;
 pub mod ui;
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use vcx::geom::sos::Angle;
@@ -61,7 +67,13 @@ pub struct World {
     pub bbox: (f64, f64, f64, f64),
     /// Counts a new complex, so that cached drawings can tell it changed.
     pub generation: u64,
+    /// The complex over the whole scene, screens included, for ray trees: built when first
+    /// needed (or why it could not be built).
+    full: OnceLock<Result<Complex, String>>,
 }
+
+/// Deepest ray tree the demo shows.
+pub const MAX_DEPTH: usize = 5;
 
 impl World {
     /// Builds the complex over the scene's objects, screens included or not.
@@ -89,6 +101,7 @@ impl World {
             polygons,
             bbox: bbox.unwrap_or((0.0, 0.0, 1.0, 1.0)),
             generation: 0,
+            full: OnceLock::new(),
         };
         world.rebuild(screens_in_complex)?;
         Ok(world)
@@ -129,6 +142,31 @@ impl World {
         self.screens_in_complex = screens_in_complex;
         self.generation += 1;
         Ok(())
+    }
+
+    /// The complex over the whole scene, screens included, for ray trees; built on the
+    /// first call and kept.
+    pub fn full_complex(&self) -> Result<&Complex, String> {
+        self.full
+            .get_or_init(|| {
+                build_by_sweep(&self.scene()).map_err(|e| {
+                    format!(
+                        "{}: internal: cannot build the complex with screens: {e}",
+                        self.name
+                    )
+                })
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    /// Whether `q` is inside or on any object of the whole scene, screens included (ray
+    /// trees need a viewpoint outside the screens too).
+    pub fn blocked_in_scene(&self, q: QueryPoint) -> Option<ObjectId> {
+        point_in_scene(&self.scene(), q).and_then(|l| match l {
+            Location::Inside { object } | Location::OnBoundary { object } => Some(object),
+            Location::Free { .. } => None,
+        })
     }
 
     /// The subset of the scene the complex is built over.
@@ -258,15 +296,23 @@ impl World {
     }
 }
 
-/// One interval of the view, with the object's id in the whole scene.
-#[derive(Clone, Copy, Debug)]
+/// One interval of the view (depth 0) or of the ray tree (depth > 0), with ids in the
+/// whole scene.
+#[derive(Clone, Debug)]
 pub struct Seen {
-    /// Exact direction of the start boundary.
+    /// Direction of the start boundary: exact for a depth-0 view and for the primary
+    /// boundaries of a ray tree; for a deeper boundary of a ray tree (known in `f64` only)
+    /// the direction of an integer vector close to `start_radians` ([`columns::direction_angle`]).
     pub start: Angle,
-    /// The same in radians, `[0, 2π)`, for drawing.
+    /// Whether `start` is the exact boundary.
+    pub exact: bool,
+    /// The start in radians, `[0, 2π)`, for drawing and output.
     pub start_radians: f64,
-    /// The object seen (id in the whole scene); `None`: nothing.
+    /// The last object of the branch (id in the whole scene): what the ray finally hits;
+    /// `None`: nothing.
     pub object: Option<ObjectId>,
+    /// The objects along the ray, primary first, screens left out (at depth 0: `object`).
+    pub branch: Vec<ObjectId>,
     /// The vertex causing the start boundary (global index).
     pub start_vertex: Option<usize>,
 }
@@ -276,9 +322,11 @@ pub struct Seen {
 pub struct FrameData {
     /// The viewpoint.
     pub q: QueryPoint,
+    /// The ray-tree depth (0: the plain view).
+    pub depth: usize,
     /// The view, sorted by start angle; the last interval wraps through θ = 0.
     pub view: Vec<Seen>,
-    /// Microseconds spent in [`vcx::walk::view`].
+    /// Microseconds spent in [`vcx::walk::view`] or [`vcx::walk::ray_tree`].
     pub view_micros: f64,
     /// Walk steps of the trace (cylinders entered, the start cylinder included).
     pub events: usize,
@@ -286,37 +334,179 @@ pub struct FrameData {
     pub active: Vec<CylinderId>,
 }
 
-/// The view from `q` and the statistics of its walk.
-pub fn compute_frame(world: &World, q: QueryPoint) -> Result<FrameData, WalkError> {
+/// The view from `q` (at `depth` > 0 its ray tree, over [`World::full_complex`]) and the
+/// statistics of the primary walk over the complex shown ([`World::complex`]).
+pub fn compute_frame(world: &World, q: QueryPoint, depth: usize) -> Result<FrameData, String> {
     let sub = world.sub();
     let scene = sub.as_ref();
-    let start = Instant::now();
-    let intervals = vcx::walk::view(&world.complex, &scene, q)?;
-    let view_micros = start.elapsed().as_secs_f64() * 1e6;
+    let (view, view_micros) = if depth == 0 {
+        let start = Instant::now();
+        let intervals = vcx::walk::view(&world.complex, &scene, q).map_err(|e| e.to_string())?;
+        let micros = start.elapsed().as_secs_f64() * 1e6;
+        let view = intervals
+            .iter()
+            .map(|i| {
+                let object = i.object.and_then(|o| sub.original(o));
+                Seen {
+                    start: i.start,
+                    exact: true,
+                    start_radians: i.start.radians(),
+                    object,
+                    branch: object.into_iter().collect(),
+                    start_vertex: i.start_vertex,
+                }
+            })
+            .collect();
+        (view, micros)
+    } else {
+        let full = world.full_complex()?;
+        if let Some(o) = world.blocked_in_scene(q) {
+            return Err(format!(
+                "the viewpoint is in {}: ray trees need it outside every object, screens included",
+                world.describe(o)
+            ));
+        }
+        let start = Instant::now();
+        let tree =
+            vcx::walk::ray_tree(full, &world.scene(), q, depth).map_err(|e| e.to_string())?;
+        let micros = start.elapsed().as_secs_f64() * 1e6;
+        let view = tree
+            .into_iter()
+            .map(|t| Seen {
+                start: t
+                    .exact_start
+                    .unwrap_or_else(|| columns::direction_angle(t.start)),
+                exact: t.exact_start.is_some(),
+                start_radians: t.start,
+                object: t.branch.last().copied(),
+                branch: t.branch,
+                start_vertex: t.start_vertex,
+            })
+            .collect();
+        (view, micros)
+    };
     let mut events = 0;
     let mut active = Vec::new();
-    world.complex.walk_trace(&scene, q, |s| {
-        events += 1;
-        active.push(s.cylinder);
-    })?;
+    world
+        .complex
+        .walk_trace(&scene, q, |s| {
+            events += 1;
+            active.push(s.cylinder);
+        })
+        .map_err(|e: WalkError| e.to_string())?;
     active.sort_unstable_by_key(|c| c.index());
     active.dedup();
-    let view = intervals
-        .iter()
-        .map(|i| Seen {
-            start: i.start,
-            start_radians: i.start.radians(),
-            object: i.object.and_then(|o| sub.original(o)),
-            start_vertex: i.start_vertex,
-        })
-        .collect();
     Ok(FrameData {
         q,
+        depth,
         view,
         view_micros,
         events,
         active,
     })
+}
+
+/// One stage of a ray drawn in `f64`: from `from` to the hit `to` on the edge `edge` of an
+/// object (the polygon's edge index), `None` for a stage that escapes (drawn to `to`, far
+/// away).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stage {
+    /// Start of the stage.
+    pub from: (f64, f64),
+    /// End of the stage.
+    pub to: (f64, f64),
+    /// The object hit and the edge hit, if any.
+    pub hit: Option<(ObjectId, usize)>,
+}
+
+/// The polyline of the ray from `q` at angle `a` (radians) along `branch`, in `f64`, for
+/// drawing only: at each mirror of the branch (but the last object) the direction is
+/// reflected across the hit edge; through a refractive object the ray is drawn straight
+/// on (an approximation: the true ray bends at the entry and the exit edge by the tangent
+/// law, and that is not reproduced here). `escape` is the length of the last stage when
+/// the ray escapes to infinity after the branch (`escapes`).
+pub fn trace_branch(
+    world: &World,
+    q: (f64, f64),
+    a: f64,
+    branch: &[ObjectId],
+    escapes: bool,
+    escape: f64,
+) -> Vec<Stage> {
+    let mut stages = Vec::with_capacity(branch.len() + 1);
+    let mut p = q;
+    let mut d = (a.cos(), a.sin());
+    for (k, &o) in branch.iter().enumerate() {
+        let Some(poly) = world.polygons.get(o.0 as usize) else {
+            break;
+        };
+        let (to, edge) = match ray_polygon(poly, p, d) {
+            Some((t, e)) => ((p.0 + t * d.0, p.1 + t * d.1), Some(e)),
+            None => {
+                // Rounding (or the straight refraction) missed: aim at the nearest vertex.
+                let v = poly
+                    .iter()
+                    .copied()
+                    .min_by(|u, v| {
+                        let du = (u.0 - p.0).hypot(u.1 - p.1);
+                        let dv = (v.0 - p.0).hypot(v.1 - p.1);
+                        du.total_cmp(&dv)
+                    })
+                    .unwrap_or(p);
+                let len = (v.0 - p.0).hypot(v.1 - p.1);
+                if len > 0.0 {
+                    d = ((v.0 - p.0) / len, (v.1 - p.1) / len);
+                }
+                (v, None)
+            }
+        };
+        stages.push(Stage {
+            from: p,
+            to,
+            hit: edge.map(|e| (o, e)),
+        });
+        p = to;
+        let last = k + 1 == branch.len();
+        if !last && world.material(o) == Some(vcx::Material::Mirror) {
+            if let Some(e) = edge {
+                let a0 = poly[e];
+                let a1 = poly[(e + 1) % poly.len()];
+                let (ex, ey) = (a1.0 - a0.0, a1.1 - a0.1);
+                let len2 = ex * ex + ey * ey;
+                if len2 > 0.0 {
+                    // d' = 2 (d·e) e / |e|² − d.
+                    let dot = (d.0 * ex + d.1 * ey) / len2;
+                    d = (2.0 * dot * ex - d.0, 2.0 * dot * ey - d.1);
+                    let n = d.0.hypot(d.1);
+                    d = (d.0 / n, d.1 / n);
+                }
+            }
+        }
+    }
+    if escapes {
+        stages.push(Stage {
+            from: p,
+            to: (p.0 + escape * d.0, p.1 + escape * d.1),
+            hit: None,
+        });
+    }
+    stages
+}
+
+/// Whether the ray of a branch escapes to infinity after its last object: at depth > 0, a
+/// branch ending on a mirror or a refractive object with depth to spare.
+pub fn escapes(world: &World, branch: &[ObjectId], depth: usize) -> bool {
+    match branch.last() {
+        None => true,
+        Some(&o) => {
+            depth > 0
+                && branch.len() <= depth
+                && matches!(
+                    world.material(o),
+                    Some(vcx::Material::Mirror | vcx::Material::Refractive { .. })
+                )
+        }
+    }
 }
 
 /// The first hit of the ray from `p` in unit direction `d` with a convex polygon: the

@@ -8,10 +8,16 @@
 //!   ∝ 1/distance, shaded by distance, edge orientation and material) or floor/ceiling;
 //!   vertical coverage of the wall's top and bottom edges is fractional too. The cell then
 //!   shows the quadrant glyph (▘▝▀▖▌▞▛ …) with the two colours that fit its four
-//!   sub-pixels best.
+//!   sub-pixels best. At depth > 0 a piece shows the last object of its branch (what the
+//!   ray finally hits) at the unfolded length of the ray, darker by a factor per bounce;
+//!   when the ray went on from a mirror or a refractive object, that first object's wall
+//!   is drawn as a frame — a band of its colour along its top and bottom, a light tint of
+//!   it inside — and what is seen through it is clipped to it.
 //! * **Map**: the scene from above in braille dots, the viewpoint `@`, the field of view
 //!   and the rays from the viewpoint to the vertices that cause the view's boundaries
-//!   (bright inside the field of view, dim outside).
+//!   (bright inside the field of view, dim outside). At depth > 0 also the rays of a few
+//!   sample columns through their reflections (polylines in `f64`, one colour per
+//!   generation; refraction drawn straight through, see [`super::trace_branch`]).
 //! * **Dual space**: the `(θ, u)` plane, θ in `[0, 2π)` across, `u = cross(d(θ), p)` up:
 //!   u measured from the middle of the scene (a shift of origin keeps the trace small).
 //!   The window spans the field of view and a quarter of it on each side in θ, and the
@@ -33,8 +39,8 @@ use vcx::line_space::{tangent_vertex, Chain};
 use vcx::partition::Wall;
 use vcx::{Material, ObjectId};
 
-use super::app::{App, DEPTH_NOTE};
-use super::columns::{columns, direction_angle, Column};
+use super::app::{depth_note, App};
+use super::columns::{columns, direction_angle, interval_at, Column};
 use super::raster::{Braille, Transform};
 
 /// Smallest terminal the panes are drawn in.
@@ -179,8 +185,9 @@ fn draw_status(app: &App, area: Rect, buf: &mut Buffer) {
         None => String::new(),
     };
     let first = format!(
-        "fps {:.1} │ events/frame {events} │ active cylinders {active} │ depth 0 │ viewpoint ({:.2}, {:.2}) heading {:.1}° │ view {view_ms}{screens}{playback}",
+        "fps {:.1} │ events/frame {events} │ active cylinders {active} │ depth {} │ viewpoint ({:.2}, {:.2}) heading {:.1}° │ view {view_ms}{screens}{playback}",
         app.fps(),
+        app.depth,
         app.x,
         app.y,
         app.heading_deg,
@@ -196,7 +203,7 @@ fn draw_status(app: &App, area: Rect, buf: &mut Buffer) {
     } else if let Some(m) = app.message() {
         Line::styled(m.to_string(), Style::default().fg(Color::Yellow))
     } else {
-        Line::styled(DEPTH_NOTE, Style::default().fg(Color::Gray))
+        Line::styled(depth_note(app.depth), Style::default().fg(Color::Gray))
     };
     let third = Line::styled(
         format!(
@@ -279,7 +286,13 @@ struct Paint {
     fraction: f64,
     /// `None`: nothing seen (floor and ceiling only).
     wall: Option<(Rgb, f64, f64)>,
+    /// At depth > 0, the wall of the first mirror or refractive object the ray went on
+    /// from: its colour and span; what is seen is clipped to it.
+    glass: Option<(Rgb, f64, f64)>,
 }
+
+/// Darkening per bounce at depth > 0.
+const PER_BOUNCE: f64 = 0.78;
 
 fn draw_view(app: &App, area: Rect, buf: &mut Buffer) {
     let frame = match &app.frame {
@@ -304,13 +317,17 @@ fn draw_view(app: &App, area: Rect, buf: &mut Buffer) {
         let bg = background(r as f64 + 0.5, rows);
         let mut acc = (0.0, 0.0, 0.0);
         for p in &paints[j] {
-            let c = match p.wall {
-                Some((colour, top, bottom)) => {
-                    let cover = (r1.min(bottom) - r0.max(top)).clamp(0.0, 1.0);
-                    mix(bg, colour, cover)
-                }
+            let cover = |top: f64, bottom: f64| (r1.min(bottom) - r0.max(top)).clamp(0.0, 1.0);
+            let mut c = match p.wall {
+                Some((colour, top, bottom)) => mix(bg, colour, cover(top, bottom)),
                 None => bg,
             };
+            if let Some((g, top, bottom)) = p.glass {
+                let band = (bottom - top).min(2.0) * 0.35;
+                let edge = (cover(top, top + band) + cover(bottom - band, bottom)).min(1.0);
+                let framed = mix(mix(c, g, 0.12), g, edge);
+                c = mix(bg, framed, cover(top, bottom));
+            }
             acc = (
                 acc.0 + c.0 * p.fraction,
                 acc.1 + c.1 * p.fraction,
@@ -348,15 +365,27 @@ fn paint_column(app: &App, column: &Column, w: usize, rows: f64) -> Vec<Paint> {
         .pieces
         .iter()
         .map(|p| {
+            let span = |d: f64| {
+                let d = d.max(1e-6);
+                (
+                    horizon - (wall_height - eye) / d * per_radian,
+                    horizon + eye / d * per_radian,
+                )
+            };
+            let dim = PER_BOUNCE.powi(p.bounces.min(16) as i32);
             let wall = p.object.filter(|_| p.distance.is_finite()).map(|o| {
-                let d = p.distance.max(1e-6);
-                let top = horizon - (wall_height - eye) / d * per_radian;
-                let bottom = horizon + eye / d * per_radian;
-                (shade(app, o, p.distance, p.facing), top, bottom)
+                let (top, bottom) = span(p.distance);
+                let c = shade(app, o, p.distance, p.facing);
+                ((c.0 * dim, c.1 * dim, c.2 * dim), top, bottom)
+            });
+            let glass = p.first.filter(|_| p.first_distance.is_finite()).map(|o| {
+                let (top, bottom) = span(p.first_distance);
+                (base_rgb(app.world.material(o), o.0), top, bottom)
             });
             Paint {
                 fraction: p.fraction,
                 wall,
+                glass,
             }
         })
         .collect()
@@ -490,6 +519,36 @@ fn draw_map(app: &App, area: Rect, buf: &mut Buffer) {
                 (Color::Rgb(55, 55, 68), 0)
             };
             canvas.line(eye, t.dot(vx, vy), colour, priority);
+        }
+    }
+    // At depth > 0: the rays of a few sample columns through their reflections.
+    if let Ok(frame) = &app.frame {
+        if frame.depth > 0 && !frame.view.is_empty() {
+            const SAMPLES: usize = 7;
+            const GENERATIONS: [Color; 4] = [
+                Color::Rgb(255, 235, 120),
+                Color::Rgb(120, 230, 255),
+                Color::Rgb(255, 140, 220),
+                Color::Rgb(150, 255, 150),
+            ];
+            let q = frame.q.to_f64();
+            for k in 0..SAMPLES {
+                let a = heading + half - app.fov() * (k as f64 + 0.5) / SAMPLES as f64;
+                let i = interval_at(&frame.view, &direction_angle(a));
+                let branch = &frame.view[i].branch;
+                let escaped = super::escapes(world, branch, frame.depth);
+                let stages =
+                    super::trace_branch(world, q, a, branch, escaped, 0.25 * world.extent());
+                for (g, st) in stages.iter().enumerate() {
+                    let colour = GENERATIONS[g % GENERATIONS.len()];
+                    canvas.line(
+                        t.dot(st.from.0, st.from.1),
+                        t.dot(st.to.0, st.to.1),
+                        colour,
+                        4,
+                    );
+                }
+            }
         }
     }
     // Field of view.
