@@ -461,7 +461,11 @@ mod views {
 fn across_from_a_cylinder_agrees_with_the_chain_search() {
     use vcx::partition::{Layer, Side};
     let mut checked = 0;
-    for (kind, n, seed) in [(SceneKind::Grid, 25, 1), (SceneKind::Mixed, 15, 2), (SceneKind::Hall, 6, 3)] {
+    for (kind, n, seed) in [
+        (SceneKind::Grid, 25, 1),
+        (SceneKind::Mixed, 15, 2),
+        (SceneKind::Hall, 6, 3),
+    ] {
         let f = generate(kind, n, seed).unwrap();
         let s = f.scene.as_ref();
         let c = build_by_sweep(&s).unwrap();

@@ -523,7 +523,10 @@ mod tests {
             (r[0].end, r[0].path.first().copied(), r[0].vertex),
             (a, Some(ObjectId(2)), None)
         );
-        assert_eq!((r[1].start, r[1].path.first().copied()), (a, Some(ObjectId(1))));
+        assert_eq!(
+            (r[1].start, r[1].path.first().copied()),
+            (a, Some(ObjectId(1)))
+        );
         assert!((r[1].end - 90f64.to_radians()).abs() < 1e-15);
         // Starting on a boundary keeps its vertex; the full circle ends where it starts.
         let r = restrict(&full, range(b.to_degrees(), b.to_degrees()));
@@ -533,7 +536,10 @@ mod tests {
         // The full circle from inside an interval: it is cut in two.
         let r = restrict(&full, range(120.0, 120.0));
         assert_eq!(r.len(), 4);
-        assert_eq!((r[0].path.first().copied(), r[0].vertex), (Some(ObjectId(1)), None));
+        assert_eq!(
+            (r[0].path.first().copied(), r[0].vertex),
+            (Some(ObjectId(1)), None)
+        );
         assert_eq!(
             (r[3].start, r[3].path.first().copied(), r[3].vertex),
             (a, full[0].path.first().copied(), full[0].vertex)
