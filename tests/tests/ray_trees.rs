@@ -14,6 +14,9 @@ use vcx::{Eta, Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene}
 use vcx_demo::generate::{generate, SceneKind};
 use vcx_tests::reference::{self, RayTreeOptions, RefError, Vec2};
 
+/// A hand-made object: its material and vertices.
+type Polygon = (Material, Vec<Point>);
+
 fn scale(n: usize) -> usize {
     if std::env::var_os("VCX_LONG").is_some() {
         n * 20
@@ -33,7 +36,7 @@ fn written(s: &SceneRef<'_>, k: usize) -> (u32, usize) {
 }
 
 fn angle_close(a: f64, b: f64) -> bool {
-    let tau = std::f64::consts::TAU;
+    let tau = core::f64::consts::TAU;
     let d = (a - b).rem_euclid(tau);
     d.min(tau - d) < 1e-9
 }
@@ -167,7 +170,7 @@ fn depth_zero_is_the_view() {
 #[test]
 fn hand_made_scenes_match_the_reference() {
     let eta = Eta::from_f64(1.5).unwrap();
-    let scenes: Vec<(&str, Vec<(Material, Vec<Point>)>)> = vec![
+    let scenes: Vec<(&str, Vec<Polygon>)> = vec![
         (
             "one mirror",
             vec![
