@@ -30,7 +30,11 @@ fuzz_target!(|input: Input| {
         for o in scene.as_ref().objects() {
             let poly = scene.as_ref().polygon(o);
             for i in 0..poly.len() {
-                let (a, b, c) = (poly[i], poly[(i + 1) % poly.len()], poly[(i + 2) % poly.len()]);
+                let (a, b, c) = (
+                    poly[i],
+                    poly[(i + 1) % poly.len()],
+                    poly[(i + 2) % poly.len()],
+                );
                 assert_eq!(vcx::geom::predicates::orient(a, b, c), vcx::Sign::Positive);
             }
         }

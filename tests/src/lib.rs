@@ -13,6 +13,7 @@
 //! * [`reference::free_bitangents`] — free bitangents of the perturbed scene;
 //! * [`reference::sos_orient`] — the perturbed orientation predicate, by symbolic expansion.
 
+pub mod generators;
 pub mod reference;
 
 pub use reference::*;
