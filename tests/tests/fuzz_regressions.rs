@@ -304,7 +304,10 @@ fn printed_inputs_are_rust() {
             objects: vec![],
         },
         depth: 2,
-        viewpoints: vec![Raw { x: -1, y: 1099511627776 }],
+        viewpoints: vec![Raw {
+            x: -1,
+            y: 1099511627776
+        }],
     });
     round_trip!(IncrementalInput {
         scene: SceneSpec {
