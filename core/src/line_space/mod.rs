@@ -100,19 +100,20 @@ pub fn object_ahead_of_query(
     })
 }
 
-/// The two tangent lines from the query point `q` (outside the object) to `object`: for
-/// each, the tangent vertex (global index) and the chain on which the oriented line from
-/// `q` through that vertex lies. The reversed line lies on the other chain.
+/// The tangent lines from the query point `q` to `object`: for each, the tangent vertex
+/// (global index) and the chain on which the oriented line from `q` through that vertex
+/// lies (the reversed line lies on the other chain), and how many there are — two if `q`
+/// is outside the object, none if it is inside (possible for virtual eyes).
 pub fn tangents_from(
     scene: &SceneRef<'_>,
     object: ObjectId,
     q: crate::geom::QueryPoint,
-) -> [(usize, Bound); 2] {
+) -> ([(usize, Bound); 2], usize) {
     use crate::geom::sos::orient_query;
     let mut out = [(0, Bound::Lower); 2];
     let mut found = 0;
     let Some(obj) = scene.object(object) else {
-        return out;
+        return (out, 0);
     };
     let (first, n) = (obj.first_vertex(), obj.len());
     for k in 0..n {
@@ -129,11 +130,11 @@ pub fn tangents_from(
             };
             if let Some(slot) = out.get_mut(found) {
                 *slot = (first + k, bound);
+                found += 1;
             }
-            found += 1;
         }
     }
-    out
+    (out, found)
 }
 
 /// The vertex with global index `i` and its perturbation rank.

@@ -102,41 +102,6 @@ pub(crate) struct Position {
     pub(crate) angle: Angle,
 }
 
-/// The tangents from `q` to `object` (as [`crate::line_space::tangents_from`]) and how many exist: two if `q`
-/// is outside the object, none if it is inside (possible for virtual eyes).
-fn tangents_of(
-    scene: &SceneRef<'_>,
-    object: ObjectId,
-    q: QueryPoint,
-) -> ([(usize, Bound); 2], usize) {
-    use crate::geom::sos::orient_query;
-    use crate::geom::Sign;
-    let mut out = [(0, Bound::Lower); 2];
-    let mut found = 0;
-    let Some(obj) = scene.object(object) else {
-        return (out, 0);
-    };
-    let (first, n) = (obj.first_vertex(), obj.len());
-    for k in 0..n {
-        let h = ranked(scene, first + k);
-        let prev = ranked(scene, first + (k + n - 1) % n);
-        let next = ranked(scene, first + (k + 1) % n);
-        let (sp, sn) = (orient_query(h, prev, q), orient_query(h, next, q));
-        if sp == sn {
-            let bound = if sn == Sign::Positive {
-                Bound::Lower
-            } else {
-                Bound::Upper
-            };
-            if let Some(slot) = out.get_mut(found) {
-                *slot = (first + k, bound);
-                found += 1;
-            }
-        }
-    }
-    (out, found)
-}
-
 /// One step of a walk: the trace entered `cylinder` at `angle`, crossing the chain of the
 /// object of `vertex` (a global vertex index) or, with `vertex: None`, a secondary wall.
 #[derive(Clone, Copy, Debug)]
@@ -274,7 +239,7 @@ impl Complex {
                 if anchor == Anchor::Floor(chain.object) {
                     continue;
                 }
-                let (tangents, count) = tangents_of(scene, chain.object, q);
+                let (tangents, count) = crate::line_space::tangents_from(scene, chain.object, q);
                 for &(h, bound) in tangents.iter().take(count) {
                     let forward = Angle::from_query(q, ranked(scene, h));
                     // The line q → h lies on `bound`; its reverse on the other chain.
