@@ -3,17 +3,17 @@
 //! libFuzzer's targets decode theirs, on stable and in CI.
 //!
 //! * validation against the exact oracle, construction, `validate`, `validate_at`, free
-//!   bitangents against the reference (`build`);
+//!   bitangents against the reference (`build_complex`);
 //! * point location against exact ray shooting (`locate`);
 //! * walked views and depth-0 ray trees against the reference (`walk`);
 //! * ray trees at depth 1–2 against the reference (`ray_tree`; ignored while its bugs are
 //!   open);
-//! * the randomized incremental construction against the sweep after every insertion
-//!   (`ric`).
+//! * the randomized incremental construction against the sweep after every insertion, with
+//!   memory budgets and rollback (`ric`).
 //!
-//! Case counts are sized for CI (the file takes well under a minute with the test profile's
-//! opt-level 2); `PROPTEST_CASES=N` sets every property here to `N` cases for long runs,
-//! e.g. `PROPTEST_CASES=20000 cargo test --release -p vcx-tests --test degenerate`.
+//! Case counts are sized for CI: about 10 s with two free cores (20 s on one) with the
+//! test profile's opt-level 2. `PROPTEST_CASES=N` sets every property here to `N` cases for
+//! long runs, e.g. `PROPTEST_CASES=20000 cargo test --release -p vcx-tests --test degenerate`.
 //! A failure prints the input as Rust code and its bytes: commit the bytes under
 //! `fuzz/regressions/<target>/` (see `FUZZING.md`).
 
