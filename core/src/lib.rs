@@ -16,12 +16,15 @@
 #[cfg(feature = "alloc")]
 extern crate alloc;
 
+#[cfg(feature = "format")]
+pub mod format;
 pub mod geom;
 mod ids;
 pub mod line_space;
 pub mod partition;
-pub mod scene;
 #[cfg(feature = "alloc")]
+pub mod render;
+pub mod scene;
 pub mod walk;
 
 pub use geom::{Point, QueryPoint, Sign};

@@ -1,48 +1,107 @@
-//! Firmware-style link test for `vcx`: validates a scene into static fixed-capacity storage
-//! and evaluates the exact and perturbed predicates, with no std and no heap.
+//! Firmware-style proof that `vcx` walks a complex with no std and no heap.
+//!
+//! The scene's polygons and its complex (vertices and cylinders) are statics in flash
+//! (`scene_data.rs`, generated and checked for staleness by the host test
+//! `tests/tests/no_alloc.rs`). At start the scene is validated into fixed-capacity storage
+//! on the stack, the complex's derived state is rebuilt into one static RAM block, and
+//! the view from each embedded viewpoint is walked into a fixed output buffer (`app.rs`,
+//! which the host test runs on the same data and checks against the exact reference).
+//!
+//! The stack is painted before the walk and scanned after it: the high-water mark is left
+//! in [`STACK_USED`] for a debugger, and with the feature `qemu` (an MPS2 board under QEMU,
+//! see `memory-qemu.x`) printed on UART0 with the view checksum.
+//!
+//! `unsafe` here (the core forbids it): the take-once cell handing `main` the static RAM
+//! block, and the volatile reads and writes of stack painting and the QEMU UART.
 #![no_std]
 #![no_main]
 
+mod app;
+#[rustfmt::skip]
+mod scene_data;
+mod stack;
+
+use core::cell::UnsafeCell;
 use core::hint::black_box;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cortex_m_rt::entry;
 use panic_halt as _;
-use vcx::geom::sos::{self, RankedPoint};
-use vcx::scene::FixedScene;
-use vcx::{Material, Point, Sign};
 
-const fn pt(x: i32, y: i32) -> Point {
-    match Point::from_raw(x << 16, y << 16) {
-        Some(p) => p,
-        None => panic!("example coordinates are in range"),
+/// Bytes of stack (from painting), for a debugger to read: `main`'s own frames (with the
+/// validated scene), and below them at most the setup (scene validation and rebuild of the
+/// derived state) and the view walks.
+pub static STACK_USED: [AtomicU32; 3] = [AtomicU32::new(0), AtomicU32::new(0), AtomicU32::new(0)];
+
+/// A static that `main` takes once, mutably. Single core, and nothing but `main` calls
+/// `take`, so a load and a store suffice (thumbv6m has no compare-and-swap).
+struct TakeOnce<T> {
+    taken: AtomicBool,
+    value: UnsafeCell<T>,
+}
+
+// SAFETY: the value is only reached through `take`, which hands out one `&mut` at most.
+unsafe impl<T: Send> Sync for TakeOnce<T> {}
+
+impl<T> TakeOnce<T> {
+    const fn new(value: T) -> Self {
+        TakeOnce {
+            taken: AtomicBool::new(false),
+            value: UnsafeCell::new(value),
+        }
+    }
+
+    // The cell hands out its one `&mut` at most once: what `mut_from_ref` warns about.
+    #[allow(clippy::mut_from_ref)]
+    fn take(&'static self) -> Option<&'static mut T> {
+        if self.taken.load(Ordering::Relaxed) {
+            return None;
+        }
+        self.taken.store(true, Ordering::Relaxed);
+        // SAFETY: `taken` was false, so no reference to the value exists; it is now true,
+        // so no other will be made.
+        Some(unsafe { &mut *self.value.get() })
     }
 }
 
-static TRIANGLE: [Point; 3] = [pt(0, 0), pt(4, 0), pt(0, 4)];
-static SQUARE: [Point; 4] = [pt(10, 10), pt(14, 10), pt(14, 14), pt(10, 14)];
+/// The walk's RAM besides the stack, in statics so that `size -A` reports it: the derived
+/// state (zero at start: `.bss`) and the output buffer (`.data`).
+static RAM: TakeOnce<app::Ram> = TakeOnce::new(app::Ram::new());
+static OUT: TakeOnce<app::Out> = TakeOnce::new(app::out());
 
 #[entry]
 fn main() -> ! {
-    let objects = [
-        (Material::Opaque, &TRIANGLE[..]),
-        (Material::Mirror, &SQUARE[..]),
-    ];
-    let scene = FixedScene::<16, 4>::new(black_box(objects));
-    let mut checksum = 0i32;
-    if let Ok(scene) = &scene {
-        let s = scene.as_ref();
-        let v = s.vertices();
-        if let (Some(a), Some(b), Some(c)) = (v.first(), v.get(1), v.get(4)) {
-            let sign = sos::orient(
-                RankedPoint::vertex(*a, 0),
-                RankedPoint::vertex(*b, 1),
-                RankedPoint::vertex(*c, 4),
-            );
-            checksum = sign.to_i8() as i32 + s.len() as i32;
-        }
-    }
-    black_box(checksum == Sign::Positive.to_i8() as i32 + 2);
+    // Phase 1: validate the scene and rebuild the derived state; phase 2: the view walks.
+    // The stack is painted before each phase and its high-water mark read after it.
+    let sp = stack::paint();
+    let scene = app::scene();
+    let complex = match (&scene, RAM.take()) {
+        (Ok(scene), Some(ram)) => app::complex(
+            &scene.as_ref(),
+            &scene_data::VERTICES,
+            &scene_data::CYLINDER_DATA,
+            ram,
+        ),
+        (Err(e), _) => Err(*e),
+        (_, None) => Err(app::Error::Taken),
+    };
+    let setup_stack = stack::used(sp);
+    let sp = stack::paint();
+    let result = match (&scene, &complex, OUT.take()) {
+        (Ok(scene), Ok(complex), Some(out)) => app::views(complex, &scene.as_ref(), out, |_, v| {
+            black_box(v);
+        }),
+        (Err(e), _, _) | (_, Err(e), _) => Err(*e),
+        (_, _, None) => Err(app::Error::Taken),
+    };
+    let walk_stack = stack::used(sp);
+    STACK_USED[0].store(stack::above(sp), Ordering::Relaxed);
+    STACK_USED[1].store(setup_stack, Ordering::Relaxed);
+    STACK_USED[2].store(walk_stack, Ordering::Relaxed);
+    #[cfg(feature = "qemu")]
+    stack::report(stack::above(sp), setup_stack, walk_stack, &result);
     loop {
-        black_box(&checksum);
+        black_box(&result);
+        black_box(&STACK_USED);
     }
 }

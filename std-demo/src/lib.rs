@@ -13,6 +13,7 @@
 pub mod demo;
 pub mod generate;
 pub mod scene_file;
+pub mod stress;
 
 pub use generate::{generate, GenerateError, SceneKind};
 pub use scene_file::{load, parse, to_json, ObjectMeta, ObjectSpec, SceneFile, SceneFileError};

@@ -6,6 +6,7 @@
 //! would be a bug too; the hook below still turns it into one line and exit status 101.
 
 mod cmd;
+mod input;
 
 use std::process::ExitCode;
 
@@ -27,10 +28,14 @@ enum Command {
     Gen(cmd::gen::Args),
     /// Build the visibility complex of a scene and print its statistics.
     Build(cmd::build::Args),
+    /// Print the header and the size of each part of a binary complex file (.vcx).
+    Inspect(cmd::inspect::Args),
     /// Locate a ray: the objects it sees ahead and behind, and its cylinder.
     Locate(cmd::locate::Args),
     /// The view from a point: the exact angular intervals of what it sees all around.
     View(cmd::view::Args),
+    /// Render the extruded-column view (the paper's Fig. 20) to a PNG, exactly anti-aliased.
+    Render(cmd::render::Args),
     /// Walk a scene in the terminal: the view, the map and the complex in dual space.
     Demo(cmd::demo::Args),
     /// Measure construction and walking (see BENCHMARKS.md).
@@ -45,9 +50,11 @@ fn main() -> ExitCode {
         Command::Check(args) => cmd::check::run(&args),
         Command::Gen(args) => cmd::gen::run(&args),
         Command::Build(args) => cmd::build::run(&args),
+        Command::Inspect(args) => cmd::inspect::run(&args),
         Command::Locate(args) => cmd::locate::run(&args),
         Command::Demo(args) => cmd::demo::run(&args),
         Command::View(args) => cmd::view::run(&args),
+        Command::Render(args) => cmd::render::run(&args),
         Command::Bench(bench) => cmd::bench::run(&bench),
     };
     match result {

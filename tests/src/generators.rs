@@ -1576,6 +1576,8 @@ pub fn check_incremental(input: &IncrementalInput) -> Result<usize, String> {
                 got.cylinders().len()
             ));
         }
+        h.validate(&s)
+            .map_err(|e| format!("history after {n:?} (#{i} of {order:?}): {e}"))?;
         let sub = SubScene::new(s, order[..=i].iter().copied());
         let sref = sub.as_ref();
         let want = build_by_sweep(&sref).map_err(|e| format!("build_by_sweep: {e}"))?;

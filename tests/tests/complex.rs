@@ -249,23 +249,39 @@ mod against_reference {
     }
 
     /// Random rays from free points: forward and backward objects of the located cylinder
-    /// agree with exact ray shooting (q perturbed to q + (ε, ε²), as in the core). Origins
-    /// and directions are drawn to hit degeneracies: vertices, edge extensions, bitangents.
+    /// agree with exact ray shooting (q perturbed to q + (ε, ε²), as in the core) — for the
+    /// brute-force `Complex::locate`, the history's `locate`, and the history's
+    /// sheet-anchored `locate_on_sheet` of the backward object from the same point and from
+    /// virtual points moved back along the ray (behind or inside that object: the same
+    /// perturbed line, so the same segment). Origins and directions are drawn to hit
+    /// degeneracies: vertices, edge extensions, bitangents. 16 000 rays per family, over
+    /// 10⁵ from free points in all.
     #[test]
     fn locate_matches_ray_shooting() {
+        use vcx::partition::{BuildOptions, History};
         let mut rng = ChaCha8Rng::seed_from_u64(7);
-        let mut checked = 0usize;
-        for (name, s) in families() {
+        let (mut checked, mut on_sheet) = (0usize, 0usize);
+        let families = families();
+        for (name, s) in &families {
             let s = s.as_ref();
             let c = build_by_sweep(&s).unwrap();
+            let h = History::build(
+                &s,
+                &BuildOptions {
+                    seed: checked as u64,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            h.validate(&s).unwrap();
             let v = s.vertices();
             let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
             for p in v {
                 lo = (lo.0.min(p.x()), lo.1.min(p.y()));
                 hi = (hi.0.max(p.x()), hi.1.max(p.y()));
             }
-            let rays = scale(2000);
-            for _ in 0..rays {
+            let rays = scale(16_000);
+            for ray in 0..rays {
                 let kind = rng.gen_range(0..4);
                 let (a, b) = (v[rng.gen_range(0..v.len())], v[rng.gen_range(0..v.len())]);
                 let (q, d) = match kind {
@@ -316,24 +332,58 @@ mod against_reference {
                 let (Some(q), Some(d)) = (q, d) else { continue };
                 let rq = Vec2::from_query(q);
                 let rd = Vec2::from_i64(d.x, d.y);
-                match (c.locate(&s, q, d), shoot_perturbed(s, &rq, &rd)) {
-                    (Some(Location::Free { cylinder }), Ok(want)) => {
-                        let cyl = c.cylinder(cylinder).unwrap();
+                // The brute-force locate scans every cylinder: judge it on a quarter of
+                // the rays, the history on all.
+                let brute = (ray % 4 == 0).then(|| c.locate(&s, q, d));
+                match (brute, shoot_perturbed(s, &rq, &rd)) {
+                    (None | Some(Some(Location::Free { .. })), Ok(want)) => {
+                        let wanted = (want.forward, want.backward);
+                        if let Some(Some(Location::Free { cylinder })) = brute {
+                            let cyl = c.cylinder(cylinder).unwrap();
+                            assert_eq!((cyl.ceiling, cyl.floor), wanted, "{name}: {q:?} {d:?}");
+                        }
+                        let (_, hc) = h.locate(&s, q, d).expect("history locate");
                         assert_eq!(
-                            (cyl.ceiling, cyl.floor),
-                            (want.forward, want.backward),
-                            "{name}: q {q:?} d {d:?}"
+                            (hc.ceiling, hc.floor),
+                            wanted,
+                            "history: {name} {q:?} {d:?}"
                         );
+                        if let Some(m) = want.backward {
+                            // Virtual eyes k·d/256 behind q on the same line.
+                            let k = rng.gen_range(0i64..=64);
+                            let back =
+                                QueryPoint::from_raw(q.x() - k * d.x * 256, q.y() - k * d.y * 256);
+                            for e in [Some(q), back].into_iter().flatten() {
+                                let (_, sc) = h
+                                    .locate_on_sheet(&s, m, e, d)
+                                    .unwrap_or_else(|| panic!("sheet: {name} {e:?} {d:?}"));
+                                assert_eq!(
+                                    (sc.ceiling, sc.floor),
+                                    wanted,
+                                    "sheet of {m:?}: {name} eye {e:?} (q {q:?}) d {d:?}"
+                                );
+                                on_sheet += 1;
+                            }
+                        }
                         checked += 1;
                     }
-                    (Some(Location::Inside { .. } | Location::OnBoundary { .. }), Err(_)) => {}
+                    (
+                        None | Some(Some(Location::Inside { .. } | Location::OnBoundary { .. })),
+                        Err(_),
+                    ) => {}
                     (got, want) => {
                         panic!("{name}: q {q:?} d {d:?}: core {got:?}, reference {want:?}")
                     }
                 }
             }
         }
-        assert!(checked > scale(2000) * 5, "too few free rays: {checked}");
+        assert!(
+            checked > scale(100_000),
+            "too few free rays: {checked} of {}",
+            families.len() * scale(16_000)
+        );
+        assert!(on_sheet > scale(50_000), "too few sheet rays: {on_sheet}");
+        println!("{checked} rays, {on_sheet} sheet-anchored");
     }
 }
 

@@ -72,6 +72,8 @@ fn check_every_prefix(name: &str, scene: &SceneRef<'_>, seed: u64) {
         }
         want.validate(&sref)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
+        h.validate(scene)
+            .unwrap_or_else(|e| panic!("{name}: history after #{i}: {e}"));
     }
 }
 
@@ -225,4 +227,63 @@ fn history_locate_agrees_with_the_complex() {
         println!("{kind:?}: {:?}", h.stats());
     }
     assert!(checked > 5000);
+}
+
+/// A history survives `to_parts` → `from_parts` (what a file stores) with the same
+/// locations, and corrupt arenas — ids out of range, a cycle, a dangling node, a repeated
+/// object in the order — are refused with an error, never a panic.
+#[test]
+fn history_parts_round_trip_and_corruption() {
+    use vcx::geom::predicates::Direction;
+    use vcx::partition::{BuildOptions, CylinderId, HistoryParts};
+    use vcx::QueryPoint;
+    let f = generate(SceneKind::Mixed, 12, 4).unwrap();
+    let s = f.scene.as_ref();
+    let h = History::build(&s, &BuildOptions::default()).unwrap();
+    let parts = h.to_parts();
+    let back = History::from_parts(&s, parts.clone()).unwrap();
+    assert_eq!(back.to_parts(), parts);
+    assert_eq!(back.stats(), h.stats());
+    for k in 0..400i64 {
+        let q = QueryPoint::from_raw((k * 7919 % 60) << 32, (k * 104_729 % 60) << 32).unwrap();
+        let d = Direction::new(k % 13 - 6, k % 7 - 3).unwrap_or(Direction::new(1, 0).unwrap());
+        let a = h.locate(&s, q, d).map(|(i, c)| (i, *c));
+        let b = back.locate(&s, q, d).map(|(i, c)| (i, *c));
+        assert_eq!(a, b, "{q:?} {d:?}");
+    }
+    let corrupt = |what: &str, f: &dyn Fn(&mut HistoryParts)| {
+        let mut p = parts.clone();
+        f(&mut p);
+        let r = History::from_parts(&s, p);
+        assert!(r.is_err(), "{what}: accepted");
+        println!("{what}: {}", r.err().unwrap());
+    };
+    let dead = parts.children.iter().position(|c| c.1 > 0).unwrap();
+    let (start, _) = parts.children[dead];
+    corrupt("link to an older node (cycle)", &|p| {
+        p.links[start as usize] = CylinderId::from_index(0).unwrap();
+    });
+    corrupt("link out of range", &|p| {
+        p.links[start as usize] = CylinderId::from_index(u32::MAX as usize - 1).unwrap();
+    });
+    corrupt("child range out of range", &|p| {
+        p.children[dead].0 = u32::MAX
+    });
+    corrupt("node never reached", &|p| {
+        let last = p.nodes.len() - 1;
+        p.nodes.push(p.nodes[last]);
+        p.children.push((0, 0));
+    });
+    corrupt("repeated object", &|p| p.order[1] = p.order[0]);
+    corrupt("floor out of range", &|p| {
+        p.nodes[3].floor = Some(ObjectId(999))
+    });
+    corrupt("vertex of the wrong object", &|p| {
+        p.vertices[0].bitangent.first = s.vertices().len() + 5
+    });
+    corrupt("a live leaf made dead", &|p| {
+        let leaf = p.children.iter().position(|c| c.1 == 0).unwrap();
+        p.children[leaf] = (start, 1);
+    });
+    corrupt("empty", &|p| *p = HistoryParts::default());
 }

@@ -4,10 +4,19 @@
 //! * [`point`]: scene points on the 2⁻¹⁶ grid, query points on the 2⁻³² grid.
 //! * [`predicates`]: exact signs (may be zero), each with its bit budget.
 //! * [`sos`]: Simulation of Simplicity — the same predicates, never zero.
+//! * `naive` (feature `naive-f64` only): the same predicates with the leading determinant
+//!   rounded in `f64`, for the stability benchmark; never for real use.
 
 pub mod point;
 pub mod predicates;
 pub mod sos;
+
+#[cfg(feature = "naive-f64")]
+mod naive;
+
+/// Whether this build decides with the naive `f64` predicates (feature `naive-f64`, for the
+/// stability benchmark only) instead of the exact ones.
+pub const NAIVE_F64: bool = cfg!(feature = "naive-f64");
 
 pub use point::{CoordinateError, Point, QueryPoint};
 

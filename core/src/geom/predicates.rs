@@ -41,6 +41,17 @@ impl Direction {
 /// exact in `i64`.
 #[inline]
 pub fn orient(p: Point, q: Point, r: Point) -> Sign {
+    #[cfg(feature = "naive-f64")]
+    {
+        let d = |a: i32, b: i32| i128::from(a) - i128::from(b);
+        super::naive::cross(
+            d(q.x(), p.x()),
+            d(q.y(), p.y()),
+            d(r.x(), p.x()),
+            d(r.y(), p.y()),
+        )
+    }
+    #[cfg(not(feature = "naive-f64"))]
     Sign::of_i64(orient_det(p, q, r))
 }
 
@@ -85,6 +96,14 @@ pub fn direction_cmp(p1: Point, q1: Point, p2: Point, q2: Point) -> Ordering {
             Ordering::Greater
         };
     }
+    #[cfg(feature = "naive-f64")]
+    {
+        super::naive::cross(ux as i128, uy as i128, vx as i128, vy as i128)
+            .flip()
+            .to_i8()
+            .cmp(&0)
+    }
+    #[cfg(not(feature = "naive-f64"))]
     0.cmp(&cross_i64(ux, uy, vx, vy))
 }
 
@@ -95,6 +114,9 @@ pub fn direction_cmp(p1: Point, q1: Point, p2: Point, q2: Point) -> Ordering {
 pub fn along(d: Direction, p: QueryPoint, r: QueryPoint) -> Sign {
     let dx = r.x() as i128 - p.x() as i128;
     let dy = r.y() as i128 - p.y() as i128;
+    #[cfg(feature = "naive-f64")]
+    return super::naive::dot(d.x as i128, d.y as i128, dx, dy);
+    #[cfg(not(feature = "naive-f64"))]
     Sign::of_i128(d.x as i128 * dx + d.y as i128 * dy)
 }
 
@@ -106,6 +128,9 @@ pub fn along(d: Direction, p: QueryPoint, r: QueryPoint) -> Sign {
 pub fn parallel_offset(d: Direction, r: QueryPoint, s: QueryPoint) -> Sign {
     let dx = s.x() as i128 - r.x() as i128;
     let dy = s.y() as i128 - r.y() as i128;
+    #[cfg(feature = "naive-f64")]
+    return super::naive::cross(d.x as i128, d.y as i128, dx, dy);
+    #[cfg(not(feature = "naive-f64"))]
     Sign::of_i128(d.x as i128 * dy - d.y as i128 * dx)
 }
 
@@ -120,6 +145,9 @@ pub fn orient_query(a: Point, b: Point, q: QueryPoint) -> Sign {
     let uy = b.y() as i128 - a.y() as i128;
     let vx = q.x() as i128 - a.x() as i128;
     let vy = q.y() as i128 - a.y() as i128;
+    #[cfg(feature = "naive-f64")]
+    return super::naive::cross(ux, uy, vx, vy);
+    #[cfg(not(feature = "naive-f64"))]
     Sign::of_i128(ux * vy - uy * vx)
 }
 
@@ -134,6 +162,9 @@ pub fn orient_query(a: Point, b: Point, q: QueryPoint) -> Sign {
 pub fn object_ahead(q: QueryPoint, d: Direction, a: Point, b: Point) -> Sign {
     let ex = b.x() as i128 - a.x() as i128;
     let ey = b.y() as i128 - a.y() as i128;
+    #[cfg(feature = "naive-f64")]
+    let crossing = super::naive::cross(d.x as i128, d.y as i128, ex, ey);
+    #[cfg(not(feature = "naive-f64"))]
     let crossing = Sign::of_i128(d.x as i128 * ey - d.y as i128 * ex);
     orient_query(a, b, q).times(crossing)
 }

@@ -125,6 +125,9 @@ fn vars(a: Sym, b: Sym, c: Sym, d: Sym) -> ([Var; 4], usize) {
 fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
     let (ux, uy) = (a.x - b.x, a.y - b.y);
     let (vx, vy) = (c.x - d.x, c.y - d.y);
+    #[cfg(feature = "naive-f64")]
+    let exact = super::naive::cross(ux, uy, vx, vy);
+    #[cfg(not(feature = "naive-f64"))]
     let exact = Sign::of_i128(ux * vy - uy * vx);
     if exact != Sign::Zero {
         return exact;
@@ -166,6 +169,9 @@ fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
 
 /// Perturbed sign of `dot(w, a − b)` for a constant vector `w`.
 fn dot(w: Direction, a: Sym, b: Sym) -> Sign {
+    #[cfg(feature = "naive-f64")]
+    let exact = super::naive::dot(w.x as i128, w.y as i128, a.x - b.x, a.y - b.y);
+    #[cfg(not(feature = "naive-f64"))]
     let exact = Sign::of_i128(w.x as i128 * (a.x - b.x) + w.y as i128 * (a.y - b.y));
     if exact != Sign::Zero {
         return exact;
@@ -372,6 +378,9 @@ impl Angle {
                 Ordering::Greater
             };
         }
+        #[cfg(feature = "naive-f64")]
+        return super::naive::cross(ux, uy, vx, vy).flip().to_i8().cmp(&0);
+        #[cfg(not(feature = "naive-f64"))]
         0.cmp(&(ux * vy - uy * vx))
     }
 
@@ -444,6 +453,9 @@ impl Angle {
     pub fn along_exact(&self, p: RankedPoint, r: RankedPoint) -> Sign {
         let (dx, dy) = (self.head.x - self.tail.x, self.head.y - self.tail.y);
         let (a, b) = (Sym::vertex(p), Sym::vertex(r));
+        #[cfg(feature = "naive-f64")]
+        return super::naive::dot(dx, dy, b.x - a.x, b.y - a.y);
+        #[cfg(not(feature = "naive-f64"))]
         Sign::of_i128(dx * (b.x - a.x) + dy * (b.y - a.y))
     }
 }

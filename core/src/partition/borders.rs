@@ -3,10 +3,13 @@
 //! a lower chain (and above an upper chain) lies one layer, the one in which the chain's
 //! object is not crossed; on the other side lie two, before and after the object in t.
 
+#[cfg(feature = "alloc")]
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
-use super::{Complex, Cylinder, CylinderId, Wall};
+#[cfg(feature = "alloc")]
+use super::Complex;
+use super::{Cylinder, CylinderId, Storage, Vertex, Wall};
 use crate::geom::sos::Angle;
 use crate::line_space::Chain;
 use crate::scene::SceneRef;
@@ -43,21 +46,132 @@ impl Layer {
     }
 }
 
-/// Derived lookup state of a complex, rebuilt from its cylinders and vertices (never
-/// trusted from a file): the angle of every vertex, and for every chain, side and layer the
-/// bordering cylinders sorted by θ, addressed by an index (no map on the walk's hot path).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Borders {
-    /// θ of every vertex, in vertex order.
-    pub(crate) angles: Vec<Angle>,
-    /// `tilings[slot(chain, side, layer)]`: cylinders sorted by θ.
-    tilings: Vec<Vec<CylinderId>>,
+/// Derived lookup state of a complex, borrowed: the angle of every vertex, and for every
+/// chain, side and layer the bordering cylinders sorted by θ (one flat id array cut by
+/// offsets), addressed by an index (no map on the walk's hot path). Rebuilt from the
+/// cylinders and vertices, never trusted from a file: [`BordersRef::rebuild_into`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BordersRef<'a> {
+    /// θ of every vertex, in vertex order; empty to compute angles on demand (saves
+    /// `size_of::<Angle>()` bytes of RAM per vertex, costs one angle construction per wall).
+    angles: &'a [Angle],
+    /// The tilings, one after the other: `ids[offsets[k]..offsets[k + 1]]` is tiling `k`.
+    ids: &'a [CylinderId],
+    /// `12 · objects + 1` offsets into `ids`.
+    offsets: &'a [u32],
     /// For every cylinder, its bottom (`[0]`) and top (`[1]`) arc, and each of the (at most
     /// two) layers on the far side of that arc: the index, in the far side's tiling, of the
     /// cylinder containing this cylinder's left wall. A walk leaving the cylinder across
     /// the arc scans forward from there.
+    start: &'a [[[u32; 2]; 2]],
+}
+
+/// Derived lookup state of a complex in growable storage (feature `alloc`).
+#[cfg(feature = "alloc")]
+#[derive(Clone, Debug, Default)]
+pub struct Borders {
+    angles: Vec<Angle>,
+    ids: Vec<CylinderId>,
+    offsets: Vec<u32>,
     start: Vec<[[u32; 2]; 2]>,
 }
+
+#[cfg(feature = "alloc")]
+impl Borders {
+    /// The borrowed view.
+    pub fn borrowed(&self) -> BordersRef<'_> {
+        BordersRef {
+            angles: &self.angles,
+            ids: &self.ids,
+            offsets: &self.offsets,
+            start: &self.start,
+        }
+    }
+}
+
+/// How many elements each buffer of [`BorderBuffers`] needs.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct BorderSizes {
+    /// Vertex angles: one per vertex (or 0, to compute them on demand).
+    pub angles: usize,
+    /// Cylinder ids of the tilings: one per bounded arc of a cylinder (at most two each).
+    pub ids: usize,
+    /// Tiling offsets: `12 · objects + 1`.
+    pub offsets: usize,
+    /// Start indices: one per cylinder.
+    pub start: usize,
+}
+
+impl BorderSizes {
+    /// Sizes that suffice for any complex with these counts (`ids` is the upper bound
+    /// `2 · cylinders`); usable in `const` array lengths.
+    pub const fn for_counts(objects: usize, vertices: usize, cylinders: usize) -> BorderSizes {
+        BorderSizes {
+            angles: vertices,
+            ids: 2 * cylinders,
+            offsets: 12 * objects + 1,
+            start: cylinders,
+        }
+    }
+
+    /// The exact sizes for these cylinders (`ids` counts their bounded arcs).
+    pub fn exact(objects: usize, vertices: usize, cylinders: &[Cylinder]) -> BorderSizes {
+        let arcs = cylinders
+            .iter()
+            .map(|c| usize::from(c.bottom.is_some()) + usize::from(c.top.is_some()))
+            .sum();
+        BorderSizes {
+            ids: arcs,
+            ..BorderSizes::for_counts(objects, vertices, cylinders.len())
+        }
+    }
+
+    /// Bytes of RAM the four buffers take (with vertex angles).
+    pub const fn bytes(&self) -> usize {
+        self.angles * core::mem::size_of::<Angle>()
+            + self.ids * core::mem::size_of::<CylinderId>()
+            + self.offsets * core::mem::size_of::<u32>()
+            + self.start * core::mem::size_of::<[[u32; 2]; 2]>()
+    }
+}
+
+/// Caller-provided buffers that [`BordersRef::rebuild_into`] fills; sizes from
+/// [`BorderSizes`]. Longer buffers are fine (only a prefix is used); `angles` may also be
+/// empty.
+#[derive(Debug)]
+pub struct BorderBuffers<'a> {
+    /// Vertex angles.
+    pub angles: &'a mut [Angle],
+    /// Tiling cylinder ids.
+    pub ids: &'a mut [CylinderId],
+    /// Tiling offsets.
+    pub offsets: &'a mut [u32],
+    /// Start indices.
+    pub start: &'a mut [[[u32; 2]; 2]],
+}
+
+/// A buffer given to [`BordersRef::rebuild_into`] is too short.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct BufferTooSmall {
+    /// Which buffer: `"angles"`, `"ids"`, `"offsets"` or `"start"`.
+    pub buffer: &'static str,
+    /// How many elements it needs.
+    pub needed: usize,
+    /// How many it has.
+    pub len: usize,
+}
+
+impl core::fmt::Display for BufferTooSmall {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "buffer `{}` holds {} elements, {} needed",
+            self.buffer, self.len, self.needed
+        )
+    }
+}
+
+impl core::error::Error for BufferTooSmall {}
 
 /// Index of a (chain, side, layer) tiling: 12 slots per object.
 fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
@@ -77,79 +191,218 @@ fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
     ((chain.object.0 as usize * 2 + bound) * 2 + side) * 3 + layer
 }
 
+/// The tiling slots a cylinder appears in: below its top arc, above its bottom arc.
+fn arcs(c: &Cylinder) -> impl Iterator<Item = usize> + '_ {
+    [(c.top, Side::Below), (c.bottom, Side::Above)]
+        .into_iter()
+        .filter_map(move |(chain, side)| chain.map(|ch| slot(ch, side, Layer::of(c, ch))))
+}
+
+/// Builds the derived state in growable storage (construction and `alloc` loading).
+#[cfg(feature = "alloc")]
 pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
-    let angles: Vec<Angle> = complex
-        .vertices
-        .iter()
-        .map(|v| v.bitangent.angle(scene))
-        .collect();
-    let mut tilings: Vec<Vec<CylinderId>> = alloc::vec![Vec::new(); 12 * scene.len()];
-    for (i, c) in complex.cylinders.iter().enumerate() {
-        let id = CylinderId(i as u32);
-        for (chain, side) in [(c.top, Side::Below), (c.bottom, Side::Above)] {
-            if let Some(t) = chain.and_then(|ch| tilings.get_mut(slot(ch, side, Layer::of(c, ch))))
-            {
-                t.push(id);
+    let sizes = BorderSizes::exact(scene.len(), complex.vertices.len(), &complex.cylinders);
+    let mut b = Borders {
+        angles: alloc::vec![Angle::ZERO; sizes.angles],
+        ids: alloc::vec![CylinderId::ZERO; sizes.ids],
+        offsets: alloc::vec![0; sizes.offsets],
+        start: alloc::vec![[[0; 2]; 2]; sizes.start],
+    };
+    let buffers = BorderBuffers {
+        angles: &mut b.angles,
+        ids: &mut b.ids,
+        offsets: &mut b.offsets,
+        start: &mut b.start,
+    };
+    // The buffers have the exact sizes, so this cannot fail; an empty state only makes
+    // walks report `Corrupt`.
+    let used = BordersRef::rebuild_into(scene, &complex.vertices, &complex.cylinders, buffers)
+        .map(|r| r.ids.len())
+        .unwrap_or(0);
+    b.ids.truncate(used);
+    b
+}
+
+impl<'a> BordersRef<'a> {
+    /// Rebuilds the derived state of the complex with these vertices and cylinders into
+    /// the caller's buffers, without allocating: a counting sort of the cylinders into
+    /// their tilings, a `sort_unstable` of each tiling by left wall, and one merge per
+    /// chain for the start indices. Time O(C log C), no heap.
+    ///
+    /// The vertices must be sorted by θ (as every constructed or validated complex is); ids
+    /// out of range are skipped, so a corrupt complex makes walks fail, never panic.
+    pub fn rebuild_into(
+        scene: &SceneRef<'_>,
+        vertices: &[Vertex],
+        cylinders: &[Cylinder],
+        buffers: BorderBuffers<'a>,
+    ) -> Result<BordersRef<'a>, BufferTooSmall> {
+        let need = BorderSizes::exact(scene.len(), vertices.len(), cylinders);
+        let check = |buffer, len: usize, needed: usize| {
+            if len < needed {
+                Err(BufferTooSmall {
+                    buffer,
+                    needed,
+                    len,
+                })
+            } else {
+                Ok(())
+            }
+        };
+        if !buffers.angles.is_empty() {
+            check("angles", buffers.angles.len(), need.angles)?;
+        }
+        check("ids", buffers.ids.len(), need.ids)?;
+        check("offsets", buffers.offsets.len(), need.offsets)?;
+        check("start", buffers.start.len(), need.start)?;
+        let BorderBuffers {
+            angles,
+            ids,
+            offsets,
+            start,
+        } = buffers;
+        let angles = match angles.get_mut(..need.angles) {
+            Some(a) if !a.is_empty() => a,
+            _ => &mut [],
+        };
+        for (a, v) in angles.iter_mut().zip(vertices) {
+            *a = v.bitangent.angle(scene);
+        }
+        let (ids, offsets, start) = match (
+            ids.get_mut(..need.ids),
+            offsets.get_mut(..need.offsets),
+            start.get_mut(..need.start),
+        ) {
+            (Some(i), Some(o), Some(s)) => (i, o, s),
+            _ => {
+                return Err(BufferTooSmall {
+                    buffer: "ids",
+                    needed: need.ids,
+                    len: 0,
+                })
+            }
+        };
+
+        // Counting sort into the tilings: count per slot, prefix sums, place (the offsets
+        // serve as cursors and end up shifted by one slot), shift back.
+        offsets.fill(0);
+        for c in cylinders {
+            for s in arcs(c) {
+                if let Some(n) = offsets.get_mut(s + 1) {
+                    *n += 1;
+                }
             }
         }
-    }
-    // Vertices are sorted by θ (an invariant `validate` checks), so a wall's position in θ
-    // is its vertex index, θ = 0 first: sorting and merging compare integers.
-    let left = |id: &CylinderId| {
-        complex
-            .cylinders
-            .get(id.index())
-            .map_or(0, |c| wall_rank(c.left))
-    };
-    for list in &mut tilings {
-        list.sort_by_key(left);
-    }
-    let mut start = alloc::vec![[[0u32; 2]; 2]; complex.cylinders.len()];
-    // For every chain, merge each tiling with the tilings across the chain: both are sorted
-    // by left wall, so one pass finds, for every cylinder, the far cylinder containing its
-    // left wall.
-    for object in 0..scene.len() {
-        for bound in [
-            crate::line_space::Bound::Lower,
-            crate::line_space::Bound::Upper,
-        ] {
-            let chain = Chain {
-                object: crate::scene::ObjectId(object as u32),
-                bound,
+        let mut sum = 0u32;
+        for o in offsets.iter_mut() {
+            sum = sum.saturating_add(*o);
+            *o = sum;
+        }
+        for (i, c) in cylinders.iter().enumerate() {
+            let Some(id) = CylinderId::from_index(i) else {
+                break;
             };
-            // Cylinders above the chain leave it through their bottom (arc 0) to the side
-            // below, and conversely.
-            for (own_side, arc, far_side) in
-                [(Side::Above, 0, Side::Below), (Side::Below, 1, Side::Above)]
-            {
-                for own_layer in far_layers(chain, own_side) {
-                    let Some(own) = tilings.get(slot(chain, own_side, own_layer)) else {
-                        continue;
-                    };
-                    for (l, far_layer) in far_layers(chain, far_side).into_iter().enumerate() {
-                        let Some(far) = tilings.get(slot(chain, far_side, far_layer)) else {
-                            continue;
-                        };
-                        let mut j = 0;
-                        for id in own {
-                            let l_own = left(id);
-                            while far.get(j + 1).is_some_and(|f| left(f) <= l_own) {
-                                j += 1;
-                            }
-                            if let Some(e) = start.get_mut(id.index()) {
-                                e[arc][l] = j as u32;
+            // Slots past the last object (corrupt ids) were not counted: skip them.
+            let slots = offsets.len();
+            for s in arcs(c).filter(|&s| s + 1 < slots) {
+                if let Some(cursor) = offsets.get_mut(s) {
+                    if let Some(slot) = ids.get_mut(*cursor as usize) {
+                        *slot = id;
+                    }
+                    *cursor += 1;
+                }
+            }
+        }
+        offsets.copy_within(..offsets.len().saturating_sub(1), 1);
+        if let Some(o) = offsets.first_mut() {
+            *o = 0;
+        }
+
+        // Vertices are sorted by θ (an invariant `validate` checks), so a wall's position in
+        // θ is its vertex index, θ = 0 first: sorting and merging compare integers.
+        let left = |id: &CylinderId| cylinders.get(id.index()).map_or(0, |c| wall_rank(c.left));
+        for k in 0..offsets.len().saturating_sub(1) {
+            if let Some(list) = range(offsets, k).and_then(|r| ids.get_mut(r)) {
+                list.sort_unstable_by_key(left);
+            }
+        }
+        let ids: &'a [CylinderId] = ids;
+        let offsets: &'a [u32] = offsets;
+        let tiling = |k: usize| range(offsets, k).and_then(|r| ids.get(r)).unwrap_or(&[]);
+
+        start.fill([[0; 2]; 2]);
+        // For every chain, merge each tiling with the tilings across the chain: both are
+        // sorted by left wall, so one pass finds, for every cylinder, the far cylinder
+        // containing its left wall.
+        for object in 0..scene.len() {
+            for bound in [
+                crate::line_space::Bound::Lower,
+                crate::line_space::Bound::Upper,
+            ] {
+                let chain = Chain {
+                    object: crate::scene::ObjectId(object as u32),
+                    bound,
+                };
+                // Cylinders above the chain leave it through their bottom (arc 0) to the
+                // side below, and conversely.
+                for (own_side, arc, far_side) in
+                    [(Side::Above, 0, Side::Below), (Side::Below, 1, Side::Above)]
+                {
+                    for own_layer in far_layers(chain, own_side) {
+                        let own = tiling(slot(chain, own_side, own_layer));
+                        for (l, far_layer) in far_layers(chain, far_side).into_iter().enumerate() {
+                            let far = tiling(slot(chain, far_side, far_layer));
+                            let mut j = 0;
+                            for id in own {
+                                let l_own = left(id);
+                                while far.get(j + 1).is_some_and(|f| left(f) <= l_own) {
+                                    j += 1;
+                                }
+                                if let Some(e) = start
+                                    .get_mut(id.index())
+                                    .and_then(|e| e.get_mut(arc))
+                                    .and_then(|e| e.get_mut(l))
+                                {
+                                    *e = j as u32;
+                                }
                             }
                         }
                     }
                 }
             }
         }
+        Ok(BordersRef {
+            angles,
+            ids,
+            offsets,
+            start,
+        })
     }
-    Borders {
-        angles,
-        tilings,
-        start,
+
+    /// The angle of vertex `v`, if stored.
+    pub(crate) fn angle(&self, v: usize) -> Option<&'a Angle> {
+        self.angles.get(v)
     }
+
+    /// The cylinders bordering `chain` on `side` in `layer`, sorted by θ.
+    fn tiling(&self, chain: Chain, side: Side, layer: Layer) -> Option<&'a [CylinderId]> {
+        range(self.offsets, slot(chain, side, layer)).and_then(|r| self.ids.get(r))
+    }
+
+    /// Bytes of the borrowed buffers.
+    pub fn bytes(&self) -> usize {
+        core::mem::size_of_val(self.angles)
+            + core::mem::size_of_val(self.ids)
+            + core::mem::size_of_val(self.offsets)
+            + core::mem::size_of_val(self.start)
+    }
+}
+
+/// The id range of tiling `k`.
+fn range(offsets: &[u32], k: usize) -> Option<core::ops::Range<usize>> {
+    let a = *offsets.get(k)? as usize;
+    let b = *offsets.get(k + 1)? as usize;
+    (a <= b).then_some(a..b)
 }
 
 /// The position of a wall in θ order: θ = 0 first, then by vertex (vertices are sorted).
@@ -177,7 +430,7 @@ fn far_layers(chain: Chain, side: Side) -> heapless::Vec<Layer, 2> {
     out
 }
 
-impl Complex {
+impl<S: Storage> super::Complex<S> {
     /// Leaving cylinder `from` across its bottom (`side` = `Below`) or top (`Above`) arc at
     /// `angle` (within `from`'s θ-range), the cylinder entered in `layer`. Looks near the
     /// position of `from` along the chain instead of searching the whole chain: the
@@ -191,17 +444,18 @@ impl Complex {
         layer: Layer,
         angle: &Angle,
     ) -> Option<CylinderId> {
-        let c = self.cylinders.get(from.index())?;
+        let c = self.cylinder(from)?;
         let (chain, arc) = match side {
             Side::Below => (c.bottom?, 0),
             Side::Above => (c.top?, 1),
         };
         let l = far_layers(chain, side).iter().position(|&x| x == layer)?;
-        let list = self.borders.tilings.get(slot(chain, side, layer))?;
-        let first = *self.borders.start.get(from.index())?.get(arc)?.get(l)? as usize;
+        let borders = self.borders_ref();
+        let list = borders.tiling(chain, side, layer)?;
+        let first = *borders.start.get(from.index())?.get(arc)?.get(l)? as usize;
         // The far cylinders overlapping `from` follow each other from `first`.
         for id in list.iter().skip(first) {
-            let f = self.cylinders.get(id.index())?;
+            let f = self.cylinder(*id)?;
             let before_right = match f.right {
                 Wall::Zero => true,
                 w => angle.cmp_angle(&self.wall_angle(scene, w)?) == Ordering::Less,
@@ -222,7 +476,7 @@ impl Complex {
         layer: Layer,
         angle: &Angle,
     ) -> Option<CylinderId> {
-        let list = self.borders.tilings.get(slot(chain, side, layer))?;
+        let list = self.borders_ref().tiling(chain, side, layer)?;
         let before = |w: Wall| match w {
             Wall::Zero => true,
             Wall::Vertex(_) => self
@@ -230,13 +484,9 @@ impl Complex {
                 .is_some_and(|l| l.cmp_angle(angle) == Ordering::Less),
         };
         // The last cylinder whose left wall lies before `angle` (θ = 0 lies before all).
-        let k = list.partition_point(|&id| {
-            self.cylinders
-                .get(id.index())
-                .is_some_and(|c| before(c.left))
-        });
+        let k = list.partition_point(|&id| self.cylinder(id).is_some_and(|c| before(c.left)));
         let id = *list.get(k.checked_sub(1)?)?;
-        let c = self.cylinders.get(id.index())?;
+        let c = self.cylinder(id)?;
         let inside = match c.right {
             Wall::Zero => true,
             w => self

@@ -58,7 +58,7 @@ pub fn point_in_scene(scene: &SceneRef<'_>, q: QueryPoint) -> Option<Location> {
     })
 }
 
-impl Complex {
+impl<S: super::Storage> Complex<S> {
     /// The cylinder among `candidates` (all crossing θ = `angle`) that contains the line of
     /// direction θ through the free point `q`, in the layer containing `q`.
     pub(crate) fn locate_among<'s>(

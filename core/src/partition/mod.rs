@@ -30,9 +30,7 @@
 //! cylinders and opens three, and the number of cylinders is `3n + 1 + 3V` for `n`
 //! objects and `V` vertices (the cross-section at θ = 0 has `3n + 1` intervals).
 
-#[cfg(feature = "alloc")]
 mod borders;
-#[cfg(feature = "alloc")]
 mod locate;
 #[cfg(feature = "alloc")]
 mod ric;
@@ -42,11 +40,11 @@ mod sweep;
 mod validate;
 
 #[cfg(feature = "alloc")]
-pub use borders::{Layer, Side};
-#[cfg(feature = "alloc")]
+pub use borders::Borders;
+pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer, Side};
 pub use locate::{point_in_scene, Location};
 #[cfg(feature = "alloc")]
-pub use ric::{Budget, BuildOptions, History, HistoryStats};
+pub use ric::{Budget, BuildOptions, History, HistoryParts, HistoryStats};
 #[cfg(feature = "alloc")]
 pub use sweep::build_by_sweep;
 #[cfg(feature = "alloc")]
@@ -102,41 +100,165 @@ pub struct Cylinder {
     pub right_neighbour: Option<CylinderId>,
 }
 
-/// The visibility complex of a scene as a cylindrical partition.
+impl CylinderId {
+    /// The id with this raw value, in `const` context (for complexes embedded as Rust
+    /// statics, e.g. in firmware).
+    pub const fn from_raw(raw: u32) -> Self {
+        CylinderId(raw)
+    }
+}
+
+impl VertexId {
+    /// The id with this raw value, in `const` context.
+    pub const fn from_raw(raw: u32) -> Self {
+        VertexId(raw)
+    }
+}
+
+/// Where a [`Complex`] keeps its arrays: the vertices, the cylinders and the derived
+/// lookup state ([`BordersRef`]). [`Owned`] keeps them in vectors (feature `alloc`;
+/// construction and `alloc` loading); [`Slices`] borrows them from the caller (no heap:
+/// statics in flash, or buffers a loader filled), so a device can walk a complex without
+/// an allocator.
+pub trait Storage {
+    /// The vertices (directed free bitangents), sorted by θ.
+    type Vertices: AsRef<[Vertex]>;
+    /// The cylinders.
+    type Cylinders: AsRef<[Cylinder]>;
+    /// The derived lookup state.
+    type Borders;
+    /// The derived state as borrowed slices.
+    fn borders(b: &Self::Borders) -> BordersRef<'_>;
+}
+
+/// Growable storage: vectors (feature `alloc`). The default storage of [`Complex`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Owned;
+
+#[cfg(feature = "alloc")]
+impl Storage for Owned {
+    type Vertices = alloc::vec::Vec<Vertex>;
+    type Cylinders = alloc::vec::Vec<Cylinder>;
+    type Borders = Borders;
+    fn borders(b: &Borders) -> BordersRef<'_> {
+        b.borrowed()
+    }
+}
+
+/// Borrowed storage: slices the caller provides (no heap). Build one with
+/// [`Complex::from_slices`] or borrow an owned complex with [`Complex::as_slices`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Slices<'a>(core::marker::PhantomData<&'a ()>);
+
+impl<'a> Storage for Slices<'a> {
+    type Vertices = &'a [Vertex];
+    type Cylinders = &'a [Cylinder];
+    type Borders = BordersRef<'a>;
+    fn borders<'s>(b: &'s BordersRef<'a>) -> BordersRef<'s> {
+        *b
+    }
+}
+
+/// The visibility complex of a scene as a cylindrical partition, in storage `S`
+/// ([`Owned`] vectors by default, or caller-provided [`Slices`]).
 #[cfg(feature = "alloc")]
 #[derive(Clone, Debug, Default)]
-pub struct Complex {
-    pub(crate) vertices: alloc::vec::Vec<Vertex>,
-    pub(crate) cylinders: alloc::vec::Vec<Cylinder>,
-    pub(crate) borders: borders::Borders,
+pub struct Complex<S: Storage = Owned> {
+    pub(crate) vertices: S::Vertices,
+    pub(crate) cylinders: S::Cylinders,
+    pub(crate) borders: S::Borders,
+}
+
+/// The visibility complex of a scene as a cylindrical partition, in storage `S` (without
+/// the feature `alloc` only [`Slices`] exist).
+#[cfg(not(feature = "alloc"))]
+#[derive(Clone, Debug, Default)]
+pub struct Complex<S: Storage> {
+    pub(crate) vertices: S::Vertices,
+    pub(crate) cylinders: S::Cylinders,
+    pub(crate) borders: S::Borders,
 }
 
 #[cfg(feature = "alloc")]
 impl Complex {
+    /// An owned complex from its vertices (sorted by θ) and cylinders, with its derived
+    /// state rebuilt.
+    pub(crate) fn new_owned(
+        vertices: alloc::vec::Vec<Vertex>,
+        cylinders: alloc::vec::Vec<Cylinder>,
+        scene: &crate::scene::SceneRef<'_>,
+    ) -> Complex {
+        let mut complex = Complex {
+            vertices,
+            cylinders,
+            borders: Borders::default(),
+        };
+        complex.borders = borders::build(scene, &complex);
+        complex
+    }
+}
+
+impl<'a> Complex<Slices<'a>> {
+    /// A complex over caller-provided slices: the vertices (sorted by θ) and cylinders,
+    /// e.g. statics in flash or arrays a loader validated, and buffers for the derived
+    /// state (sizes from [`BorderSizes`]), which is rebuilt into them without allocating.
+    ///
+    /// The arrays are not validated here (the loader does that); ids out of range make
+    /// walks fail with an error, never panic or loop.
+    pub fn from_slices(
+        scene: &crate::scene::SceneRef<'_>,
+        vertices: &'a [Vertex],
+        cylinders: &'a [Cylinder],
+        buffers: BorderBuffers<'a>,
+    ) -> Result<Self, BufferTooSmall> {
+        let borders = BordersRef::rebuild_into(scene, vertices, cylinders, buffers)?;
+        Ok(Complex {
+            vertices,
+            cylinders,
+            borders,
+        })
+    }
+}
+
+impl<S: Storage> Complex<S> {
     /// The vertices (directed free bitangents), sorted by θ.
     pub fn vertices(&self) -> &[Vertex] {
-        &self.vertices
+        self.vertices.as_ref()
     }
 
     /// The cylinders.
     pub fn cylinders(&self) -> &[Cylinder] {
-        &self.cylinders
+        self.cylinders.as_ref()
+    }
+
+    /// The derived lookup state.
+    pub fn borders_ref(&self) -> BordersRef<'_> {
+        S::borders(&self.borders)
+    }
+
+    /// The same complex over borrowed slices (no copy, no allocation).
+    pub fn as_slices(&self) -> Complex<Slices<'_>> {
+        Complex {
+            vertices: self.vertices(),
+            cylinders: self.cylinders(),
+            borders: self.borders_ref(),
+        }
     }
 
     /// The cylinder with this id.
     pub fn cylinder(&self, id: CylinderId) -> Option<&Cylinder> {
-        self.cylinders.get(id.index())
+        self.cylinders().get(id.index())
     }
 
     /// The vertex with this id.
     pub fn vertex(&self, id: VertexId) -> Option<&Vertex> {
-        self.vertices.get(id.index())
+        self.vertices().get(id.index())
     }
 
     /// Number of undirected free bitangents between two different objects, counted from the
     /// vertices (each segment is a vertex in both directions).
     pub fn free_bitangents(&self) -> usize {
-        self.vertices.len() / 2
+        self.vertices().len() / 2
     }
 
     /// The angle of a wall; `None` for θ = 0 (which is 0 on the left and 2π on the right).
@@ -147,7 +269,7 @@ impl Complex {
     ) -> Option<crate::geom::sos::Angle> {
         match wall {
             Wall::Zero => None,
-            Wall::Vertex(v) => match self.borders.angles.get(v.index()) {
+            Wall::Vertex(v) => match self.borders_ref().angle(v.index()) {
                 Some(a) => Some(*a),
                 None => self.vertex(v).map(|v| v.bitangent.angle(scene)),
             },
@@ -161,17 +283,23 @@ impl Complex {
         angle: &'s crate::geom::sos::Angle,
     ) -> impl Iterator<Item = (CylinderId, &'s Cylinder)> + 's {
         use core::cmp::Ordering;
-        self.cylinders.iter().enumerate().filter_map(move |(i, c)| {
-            let after_left = self
-                .wall_angle(scene, c.left)
-                .is_none_or(|l| l.cmp_angle(angle) == Ordering::Less);
-            let before_right = self
-                .wall_angle(scene, c.right)
-                .is_none_or(|r| angle.cmp_angle(&r) == Ordering::Less);
-            (after_left && before_right).then_some((CylinderId(i as u32), c))
-        })
+        self.cylinders()
+            .iter()
+            .enumerate()
+            .filter_map(move |(i, c)| {
+                let after_left = self
+                    .wall_angle(scene, c.left)
+                    .is_none_or(|l| l.cmp_angle(angle) == Ordering::Less);
+                let before_right = self
+                    .wall_angle(scene, c.right)
+                    .is_none_or(|r| angle.cmp_angle(&r) == Ordering::Less);
+                (after_left && before_right).then_some((CylinderId(i as u32), c))
+            })
     }
+}
 
+#[cfg(feature = "alloc")]
+impl Complex {
     /// Number of faces: connected chains of cylinders across secondary walls.
     pub fn faces(&self) -> usize {
         // A face is a path (born at a vertex, dies at a vertex) or a cycle through θ = 0.

@@ -319,8 +319,29 @@ pub struct History {
     entries: usize,
     live: usize,
     order: Vec<ObjectId>,
+    /// `starts[k]`: the first node created by the insertion of `order[k]` (the nodes of one
+    /// insertion are consecutive).
+    starts: Vec<u32>,
     budget: Option<Budget>,
     scratch: Scratch,
+}
+
+/// The arenas of a [`History`], what a file stores: everything else (alive flags, vertex
+/// direction keys, the border index) is derived by [`History::from_parts`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct HistoryParts {
+    /// Every cylinder that ever existed, in creation order (node id = index).
+    pub nodes: Vec<Cylinder>,
+    /// Children of node `i`: `links[start .. start + len]` for `children[i] = (start, len)`.
+    pub children: Vec<(u32, u32)>,
+    /// The link arena.
+    pub links: Vec<CylinderId>,
+    /// Every vertex that ever existed (walls refer to them), in creation order.
+    pub vertices: Vec<Vertex>,
+    /// The insertion order.
+    pub order: Vec<ObjectId>,
+    /// `starts[k]`: the first node created by inserting `order[k]`.
+    pub starts: Vec<u32>,
 }
 
 /// A 64-bit PCG-style generator: enough for a reproducible shuffle, no dependency.
@@ -415,6 +436,7 @@ impl History {
             entries: 0,
             live: 1,
             order: Vec::new(),
+            starts: Vec::new(),
             budget: None,
             scratch: Scratch::default(),
         }
@@ -715,9 +737,9 @@ impl History {
         right && self.left_at_or_before(scene, c.left, theta)
     }
 
-    /// Whether the cylinder contains the line of direction θ⁺ through the probe, in the
-    /// layer of the probe.
-    fn contains(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key, probe: Probe) -> bool {
+    /// Whether the cylinder's trapezoid contains the line of direction θ⁺ through the
+    /// probe (whatever the layer).
+    fn spans_line(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key, probe: Probe) -> bool {
         if !self.spans(scene, c, theta) {
             return false;
         }
@@ -732,13 +754,22 @@ impl History {
                 Probe::Query(q) => theta.offset_cmp_query(q, r),
             }
         };
+        c.bottom.is_none_or(|b| above(b) == Sign::Negative)
+            && c.top.is_none_or(|t| above(t) == Sign::Positive)
+    }
+
+    /// Whether the cylinder contains the line of direction θ⁺ through the probe, in the
+    /// layer of the probe.
+    fn contains(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key, probe: Probe) -> bool {
+        if !self.spans_line(scene, c, theta, probe) {
+            return false;
+        }
+        let theta = &theta.angle;
         let ahead = |o: ObjectId| match probe {
             Probe::Vertex(p) => object_ahead_of(scene, o, theta, p),
             Probe::Query(q) => object_ahead_of_query(scene, o, theta, q),
         };
-        c.bottom.is_none_or(|b| above(b) == Sign::Negative)
-            && c.top.is_none_or(|t| above(t) == Sign::Positive)
-            && c.floor.is_none_or(|f| ahead(f) == Some(false))
+        c.floor.is_none_or(|f| ahead(f) == Some(false))
             && c.ceiling.is_none_or(|g| ahead(g) == Some(true))
     }
 
@@ -769,6 +800,236 @@ impl History {
     ) -> Option<(CylinderId, &Cylinder)> {
         let id = self.locate_probe(scene, &Key::new(Angle::constant(d)), Probe::Query(q))?;
         Some((id, self.cylinders.get(id.index())?))
+    }
+
+    /// Sheet-anchored point location (the paper's §4.2 for secondary rays): the live
+    /// cylinder of the segments of the line through `q` with direction `d` that start where
+    /// the line leaves object `m` — the floor is `m`. `q` may lie anywhere on the line (a
+    /// virtual eye behind a mirror or inside a refractive object); the line (perturbed as
+    /// for a query point) must cross `m`, otherwise `None`.
+    ///
+    /// The search starts at the nodes created by `m`'s insertion with floor `m` — they
+    /// cover every line crossing `m` at that time — and descends keeping floor = `m`:
+    /// later insertions only cut that layer, so exactly one child with floor `m` contains
+    /// the line. No query depends on objects inserted before `m`.
+    pub fn locate_on_sheet(
+        &self,
+        scene: &SceneRef<'_>,
+        m: ObjectId,
+        q: QueryPoint,
+        d: Direction,
+    ) -> Option<(CylinderId, &Cylinder)> {
+        let theta = Key::new(Angle::constant(d));
+        let probe = Probe::Query(q);
+        // The line crosses m iff it passes strictly between m's two tangents.
+        let side = |bound| {
+            let r = ranked(scene, tangent_vertex(scene, m, &theta.angle, bound));
+            theta.angle.offset_cmp_query(q, r)
+        };
+        if side(Bound::Lower) != Sign::Negative || side(Bound::Upper) != Sign::Positive {
+            return None;
+        }
+        let k = self.order.iter().position(|&o| o == m)?;
+        let first = *self.starts.get(k)? as usize;
+        let end = self
+            .starts
+            .get(k + 1)
+            .map_or(self.cylinders.len(), |&e| e as usize);
+        let on_sheet = |id: CylinderId| {
+            self.cylinders
+                .get(id.index())
+                .is_some_and(|c| c.floor == Some(m) && self.spans_line(scene, c, &theta, probe))
+        };
+        let mut cur = (first..end)
+            .filter_map(CylinderId::from_index)
+            .find(|&id| on_sheet(id))?;
+        // Each step goes to a younger node: bounded by the number of nodes.
+        for _ in 0..self.cylinders.len() {
+            if *self.alive.get(cur.index())? {
+                return Some((cur, self.cylinders.get(cur.index())?));
+            }
+            cur = *self.children(cur).iter().find(|&&c| on_sheet(c))?;
+        }
+        None
+    }
+
+    /// The arenas, to store the history (a copy).
+    pub fn to_parts(&self) -> HistoryParts {
+        HistoryParts {
+            nodes: self.cylinders.clone(),
+            children: self.kids.clone(),
+            links: self.links.clone(),
+            vertices: self.vertices.clone(),
+            order: self.order.clone(),
+            starts: self.starts.clone(),
+        }
+    }
+
+    /// A history from stored arenas (e.g. decoded from a file), trusting nothing: every id
+    /// is checked against the scene and the arenas, the insertion order must name distinct
+    /// objects with increasing node ranges, then the derived state (alive flags = leaves,
+    /// direction keys, border index) is rebuilt and [`History::validate`] runs — so
+    /// `locate` and `locate_on_sheet` on the result index only in range and terminate.
+    pub fn from_parts(scene: &SceneRef<'_>, parts: HistoryParts) -> Result<History, ComplexError> {
+        let HistoryParts {
+            nodes,
+            children,
+            links,
+            vertices,
+            order,
+            starts,
+        } = parts;
+        let bad = |node: usize, what| ComplexError::History { node, what };
+        if u32::try_from(nodes.len()).is_err()
+            || u32::try_from(links.len()).is_err()
+            || vertices.len() >= ZERO_WALL as usize
+        {
+            return Err(ComplexError::TooLarge);
+        }
+        let (objects, points) = (scene.len(), scene.vertices().len());
+        let object_ok = |o: ObjectId| (o.0 as usize) < objects && o.0 as usize <= MAX_OBJECTS;
+        for (i, v) in vertices.iter().enumerate() {
+            let b = &v.bitangent;
+            let owns = |o: ObjectId, k: usize| {
+                scene.object(o).is_some_and(|ob| {
+                    (ob.first_vertex()..ob.first_vertex() + ob.len()).contains(&k)
+                })
+            };
+            if !owns(b.first_object, b.first)
+                || !owns(b.second_object, b.second)
+                || b.first_object == b.second_object
+            {
+                return Err(ComplexError::VertexOutOfRange { vertex: i });
+            }
+            if b.first >= points || b.second >= points {
+                return Err(ComplexError::VertexOutOfRange { vertex: i });
+            }
+        }
+        for (i, c) in nodes.iter().enumerate() {
+            let wall_ok = |w: Wall| match w {
+                Wall::Zero => true,
+                Wall::Vertex(v) => v.index() < vertices.len(),
+            };
+            let link_ok = |n: Option<CylinderId>| n.is_none_or(|n| n.index() < nodes.len());
+            if !wall_ok(c.left)
+                || !wall_ok(c.right)
+                || ![
+                    c.floor,
+                    c.ceiling,
+                    c.bottom.map(|b| b.object),
+                    c.top.map(|t| t.object),
+                ]
+                .into_iter()
+                .flatten()
+                .all(object_ok)
+                || !link_ok(c.left_neighbour)
+                || !link_ok(c.right_neighbour)
+            {
+                return Err(ComplexError::IdOutOfRange { cylinder: i });
+            }
+        }
+        if nodes.is_empty() || children.len() != nodes.len() {
+            return Err(bad(
+                nodes.len(),
+                "no root, or a child range per node missing",
+            ));
+        }
+        // The order: distinct objects of the scene; node ranges increasing from 1.
+        let mut seen = alloc::vec![false; objects];
+        if order.len() != starts.len() {
+            return Err(bad(0, "insertion order and node ranges differ in length"));
+        }
+        let mut previous = 0u32;
+        for (&o, &start) in order.iter().zip(&starts) {
+            match seen.get_mut(o.0 as usize) {
+                Some(s) if !*s => *s = true,
+                _ => {
+                    return Err(bad(
+                        start as usize,
+                        "insertion order repeats or names no object",
+                    ))
+                }
+            }
+            if start <= previous || start as usize > nodes.len() {
+                return Err(bad(start as usize, "insertion node ranges not increasing"));
+            }
+            previous = start;
+        }
+        let alive: Vec<bool> = children.iter().map(|&(_, len)| len == 0).collect();
+        let dirs = vertices
+            .iter()
+            .map(|v| Dir::of(&v.bitangent.angle(scene)))
+            .collect();
+        let mut h = History {
+            live: alive.iter().filter(|&&a| a).count(),
+            cylinders: nodes,
+            alive,
+            kids: children,
+            links,
+            vertices,
+            dirs,
+            borders: alloc::vec![Vec::new(); objects.saturating_mul(SLOTS)],
+            dead: alloc::vec![0; objects.saturating_mul(SLOTS)],
+            entries: 0,
+            order,
+            starts,
+            budget: None,
+            scratch: Scratch::default(),
+        };
+        h.validate(scene)?;
+        // The border index of the live cylinders (for later insertions).
+        let live: Vec<(CylinderId, Cylinder)> = (h.cylinders.iter().zip(&h.alive))
+            .enumerate()
+            .filter(|(_, (_, &alive))| alive)
+            .map(|(i, (c, _))| (CylinderId(i as u32), *c))
+            .collect();
+        for (id, c) in live {
+            for sl in border_slots(&c).into_iter().flatten() {
+                h.insert_border(scene, sl, h.entry(c.left, id));
+            }
+        }
+        Ok(h)
+    }
+
+    /// Checks the history DAG (the paper's §4.2): every link goes to a younger node (so the
+    /// DAG is acyclic and a descent is bounded), every node but the root is reached by a
+    /// link, the leaves are exactly the live cylinders, and — once every object of `scene`
+    /// is inserted — the live cylinders form a valid complex ([`Complex::validate`]).
+    pub fn validate(&self, scene: &SceneRef<'_>) -> Result<(), ComplexError> {
+        let bad = |node: usize, what| ComplexError::History { node, what };
+        let n = self.cylinders.len();
+        if self.alive.len() != n || self.kids.len() != n {
+            return Err(bad(n, "arena lengths differ"));
+        }
+        let mut reached = alloc::vec![false; n];
+        let mut live = 0;
+        for (i, (&(start, len), &alive)) in self.kids.iter().zip(&self.alive).enumerate() {
+            let kids = self
+                .links
+                .get(start as usize..start as usize + len as usize)
+                .ok_or(bad(i, "child range out of the link arena"))?;
+            if alive != kids.is_empty() {
+                return Err(bad(i, "a live node has children or a dead one has none"));
+            }
+            live += usize::from(alive);
+            for c in kids {
+                if c.index() <= i || c.index() >= n {
+                    return Err(bad(i, "link not to a younger node"));
+                }
+                reached[c.index()] = true;
+            }
+        }
+        if let Some(i) = (1..n).find(|&i| !reached[i]) {
+            return Err(bad(i, "no link reaches it"));
+        }
+        if live != self.live {
+            return Err(bad(n, "live count differs from the alive flags"));
+        }
+        if self.order.len() < scene.len() {
+            // Part of the scene inserted: `Complex::validate` counts every object.
+            return Ok(());
+        }
+        self.complex(scene)?.validate(scene)
     }
 
     /// The live cylinder across `chain` on `side` in `layer` at θ⁺.
@@ -854,6 +1115,10 @@ impl History {
         let (nodes, vertices) = (self.cylinders.len(), self.vertices.len());
         s.begin(n, nodes, scene.len());
         let result = self.insert_with(scene, &mut s);
+        if result.is_ok() {
+            // Fits: node ids are u32 (checked by `push`).
+            self.starts.push(nodes as u32);
+        }
         if result.is_err() {
             self.cylinders.truncate(nodes);
             self.alive.truncate(nodes);

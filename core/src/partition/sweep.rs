@@ -279,11 +279,5 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         cylinders[id.index()].right_neighbour = Some(first);
         cylinders[first.index()].left_neighbour = Some(id);
     }
-    let mut complex = Complex {
-        vertices,
-        cylinders,
-        borders: Default::default(),
-    };
-    complex.borders = super::borders::build(scene, &complex);
-    Ok(complex)
+    Ok(Complex::new_owned(vertices, cylinders, scene))
 }

@@ -41,6 +41,29 @@ pub enum ComplexError {
     },
     /// Counts break `cylinders = 3·objects + 1 + 3·vertices`.
     Count,
+    /// A vertex's tangent vertices or objects are out of range for the scene.
+    VertexOutOfRange {
+        /// The vertex at fault.
+        vertex: usize,
+    },
+    /// Vertices are not strictly sorted by θ (the adjacency across chains relies on it).
+    VerticesNotSorted {
+        /// The first vertex not after its predecessor.
+        vertex: usize,
+    },
+    /// A cylinder's right wall is not after its left wall in θ.
+    WallOrder {
+        /// The cylinder at fault.
+        cylinder: usize,
+    },
+    /// The history DAG is malformed: a link out of range or not to a younger node (a
+    /// cycle), a node no link reaches, a live node with children or a dead one without.
+    History {
+        /// The node at fault.
+        node: usize,
+        /// Which rule it breaks.
+        what: &'static str,
+    },
     /// The construction needs more than its memory budget allows (or than the allocator
     /// gives): what was needed so far when it stopped.
     CapacityExceeded {
@@ -76,6 +99,16 @@ impl core::fmt::Display for ComplexError {
                 write!(f, "inserting object {object}: conflict chain lost ({step})")
             }
             ComplexError::Count => write!(f, "cylinder count breaks 3n + 1 + 3V"),
+            ComplexError::VertexOutOfRange { vertex } => {
+                write!(f, "vertex {vertex}: tangent vertex or object out of range")
+            }
+            ComplexError::VerticesNotSorted { vertex } => {
+                write!(f, "vertex {vertex}: not after the previous vertex in θ")
+            }
+            ComplexError::WallOrder { cylinder } => {
+                write!(f, "cylinder {cylinder}: right wall not after left wall")
+            }
+            ComplexError::History { node, what } => write!(f, "history node {node}: {what}"),
             ComplexError::CapacityExceeded {
                 cylinders,
                 history_nodes,
@@ -89,19 +122,74 @@ impl core::fmt::Display for ComplexError {
 }
 
 impl Complex {
-    /// Checks the structural invariants: ids in range, left/right adjacency symmetric with
-    /// the same floor, ceiling and shared wall, every vertex closing and opening three
-    /// cylinders, the count `3n + 1 + 3V`, and that the cylinders crossing θ = 0 are
-    /// exactly the cross-section there.
+    /// A complex from its arenas (e.g. decoded from a file): the derived state is rebuilt
+    /// with `borders::build`, never taken from the caller, after [`Complex::validate`]
+    /// passed — so a walk of the result cannot index out of bounds or loop forever.
+    pub fn from_parts(
+        scene: &SceneRef<'_>,
+        vertices: alloc::vec::Vec<super::Vertex>,
+        cylinders: alloc::vec::Vec<super::Cylinder>,
+    ) -> Result<Complex, ComplexError> {
+        if u32::try_from(cylinders.len()).is_err() || u32::try_from(vertices.len()).is_err() {
+            return Err(ComplexError::TooLarge);
+        }
+        let mut complex = Complex {
+            vertices,
+            cylinders,
+            borders: Default::default(),
+        };
+        complex.validate(scene)?;
+        complex.borders = super::borders::build(scene, &complex);
+        Ok(complex)
+    }
+
+    /// Checks the structural invariants: ids in range, vertices strictly sorted by θ,
+    /// walls in θ order, left/right adjacency symmetric with the same floor, ceiling and
+    /// shared wall, every vertex closing and opening three cylinders, the count
+    /// `3n + 1 + 3V`, and that the cylinders crossing θ = 0 are exactly the cross-section
+    /// there.
     pub fn validate(&self, scene: &SceneRef<'_>) -> Result<(), ComplexError> {
         let nc = self.cylinders.len();
+        let (objects, points) = (scene.len(), scene.vertices().len());
+        let mut previous: Option<Angle> = None;
+        for (i, v) in self.vertices.iter().enumerate() {
+            let b = &v.bitangent;
+            if b.first >= points
+                || b.second >= points
+                || b.first_object.0 as usize >= objects
+                || b.second_object.0 as usize >= objects
+            {
+                return Err(ComplexError::VertexOutOfRange { vertex: i });
+            }
+            // `borders` sorts walls by vertex index: that must be θ order.
+            let angle = b.angle(scene);
+            if previous.is_some_and(|p| p.cmp_angle(&angle) != core::cmp::Ordering::Less) {
+                return Err(ComplexError::VerticesNotSorted { vertex: i });
+            }
+            previous = Some(angle);
+        }
+        let rank = |w: Wall| match w {
+            Wall::Zero => 0,
+            Wall::Vertex(v) => v.index() + 1,
+        };
         for (i, c) in self.cylinders.iter().enumerate() {
             let wall_ok = |w: Wall| match w {
                 Wall::Zero => true,
                 Wall::Vertex(v) => v.index() < self.vertices.len(),
             };
-            if !wall_ok(c.left) || !wall_ok(c.right) {
+            let object_ok =
+                |o: Option<crate::scene::ObjectId>| o.is_none_or(|o| (o.0 as usize) < objects);
+            if !wall_ok(c.left)
+                || !wall_ok(c.right)
+                || !object_ok(c.floor)
+                || !object_ok(c.ceiling)
+                || !object_ok(c.bottom.map(|ch| ch.object))
+                || !object_ok(c.top.map(|ch| ch.object))
+            {
                 return Err(ComplexError::IdOutOfRange { cylinder: i });
+            }
+            if c.right != Wall::Zero && rank(c.left) >= rank(c.right) {
+                return Err(ComplexError::WallOrder { cylinder: i });
             }
             if let Some(r) = c.right_neighbour {
                 let n = self

@@ -10,16 +10,17 @@
 //! The walk starts at θ = 0 among the cylinders crossing the permanent wall and visits
 //! the events in perturbed order; the view is the sequence of ceilings.
 //!
-//! # Ray trees ([`ray_tree`])
+//! # Ray trees (`ray_tree`, feature `alloc`)
 //!
 //! The walker has two anchorings ([`Anchor`]): `Point` (the layer containing the eye, the
 //! view) and `Floor(M)` (the layer whose floor is M: the segments starting where the line
 //! leaves M), walked over an exact open angular range from a (virtual) eye. An anchored
-//! walk starts in the cylinder with floor M whose θ-range contains the range start and
-//! whose bottom chain lies below and top chain above the eye's line (by a scan over the
-//! cylinders for now — the history's sheet-anchored locate would make it logarithmic);
-//! events exactly on the opening ray belong to the start state, events on the closing ray
-//! are dropped.
+//! walk starts in the cylinder with floor M that contains the eye's line just after the
+//! range start, turned by more than the symbolic perturbation (everything exactly on the
+//! opening ray is behind: the range is open), found by climbing the stack of M's floor
+//! cylinders through the per-chain tilings (`Complex::across`; a scan only where
+//! something lies exactly on the opening ray and the two disagree); events on the closing
+//! ray are dropped.
 //!
 //! The tree is built by **recursion per interval**, not by the paper's lock-step walk of
 //! all generations: each primary interval is resolved by its ceiling —
@@ -28,8 +29,8 @@
 //! * a **mirror** M: the range is split by the directions to M's vertices (the hit edge
 //!   changes there); per edge the eye is reflected across the edge's line and rounded
 //!   exactly to the query grid ([`optics`]); the range is mapped to the new eye (exactly
-//!   `E' → v` at a vertex of the edge, otherwise through the hit point on the edge rounded
-//!   to the query grid — computed in `f64`, it only places the range end) and reversed
+//!   `E' → v` at a vertex of the edge, otherwise the direction to the hit point on the
+//!   edge — computed in `f64` at 2⁻⁵² rad, it only places the range end) and reversed
 //!   (mirrors flip orientation); the new eye walks it anchored to M, one level deeper;
 //! * a **refractive** M (tangent law, DESIGN.md §6): split by the entry edge, entry eye
 //!   `E₁ = F + η(E − F)`, split by the exit edge (M's own vertices seen from `E₁`), exit
@@ -68,16 +69,20 @@
 //! | 89 | 41.803 | 88.500 | +46.698 |
 
 pub mod optics;
+#[cfg(feature = "alloc")]
 mod tree;
 mod view;
 
+#[cfg(feature = "alloc")]
 pub use tree::{ray_tree, TreeInterval};
-pub use view::{view, ViewInterval};
+#[cfg(feature = "alloc")]
+pub use view::view;
+pub use view::{view_capacity, view_into, ViewInterval};
 
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
 use crate::line_space::{ranked, Bound, Chain};
-use crate::partition::{Complex, CylinderId, Layer, Location, Side, Wall};
+use crate::partition::{Complex, CylinderId, Layer, Location, Side, Storage, Wall};
 use crate::scene::{ObjectId, SceneRef};
 
 /// How a walk follows a trace across primary walls.
@@ -143,9 +148,15 @@ pub enum WalkError {
     },
     /// A virtual eye left the query range (`|raw| > 2⁵²`, about ±10⁶ units).
     EyeOutOfRange,
-    /// An anchored walk found no cylinder with the anchor as floor at its start (the
-    /// rounded range end missed the object's sheet).
+    /// An anchored walk found no cylinder with the anchor as floor at its start (a range
+    /// end placed in `f64` missed the object's sheet: a range thinner than `f64` resolves).
     NoStart,
+    /// The caller's output buffer is full ([`view_into`]): `needed` is a lower bound of
+    /// the length that would do ([`view_capacity`] is always enough).
+    BufferFull {
+        /// Intervals produced so far, plus the one that did not fit.
+        needed: usize,
+    },
 }
 
 impl core::fmt::Display for WalkError {
@@ -164,13 +175,16 @@ impl core::fmt::Display for WalkError {
             }
             WalkError::EyeOutOfRange => write!(f, "a virtual eye left the query range"),
             WalkError::NoStart => write!(f, "an anchored walk found no start cylinder"),
+            WalkError::BufferFull { needed } => {
+                write!(f, "output buffer full: at least {needed} intervals needed")
+            }
         }
     }
 }
 
 impl core::error::Error for WalkError {}
 
-impl Complex {
+impl<S: Storage> Complex<S> {
     /// Walks the trace of the free point `q` once around, from θ = 0, calling `step` for
     /// every cylinder entered (the first call is the start cylinder, with `vertex: None`).
     /// Allocates nothing; every iteration enters a new cylinder, and the walk is bounded by
@@ -185,7 +199,7 @@ impl Complex {
             return Err(WalkError::NotFree(l));
         }
         let zero = self
-            .cylinders
+            .cylinders()
             .iter()
             .enumerate()
             .filter(|(_, c)| c.left == Wall::Zero)
@@ -226,7 +240,7 @@ impl Complex {
         let before = |a: (u8, &Angle), b: (u8, &Angle)| {
             a.0 < b.0 || (a.0 == b.0 && a.1.cmp_angle(b.1) == Ordering::Less)
         };
-        for _ in 0..4 * self.cylinders.len() + 4 {
+        for _ in 0..4 * self.cylinders().len() + 4 {
             let c = self.cylinder(cur).ok_or(WalkError::Corrupt)?;
             // The first exit after θ: the right wall, or a crossing of the bottom or top chain.
             let mut best: Option<(u8, Angle, Option<ChainExit>)> = match c.right {

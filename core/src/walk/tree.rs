@@ -26,8 +26,8 @@ use super::{optics, Anchor, Position, WalkError};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::{Point, QueryPoint, Sign};
-use crate::line_space::{ranked, tangent_vertex, Chain};
-use crate::partition::{Complex, CylinderId, Wall};
+use crate::line_space::{ranked, Bound, Chain};
+use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Wall};
 use crate::scene::{Material, ObjectId, SceneRef};
 
 /// One interval of a ray-tree sweep: primary directions from `start` counter-clockwise to
@@ -61,8 +61,10 @@ struct Dir {
 /// one per hop), the first one whose ray, beyond its origin, holds a vertex of the object
 /// that stage hits on either side; the vertex nearest to that stage's eye. The stage where
 /// the boundary arises is tested exactly; earlier stages (a coincidence, frequent only in
-/// grid-aligned scenes) are tested in `f64` with a relative tolerance of 1e-10 — an exact
-/// test needs 256-bit products (later work).
+/// grid-aligned scenes) are tested in `f64` with a relative tolerance of 1e-12 (the map
+/// back is accurate to a few ulps unless a hop grazes its edge; 1e-10 took a vertex
+/// 7·10⁻¹¹ off the ray of touching objects, `boundary_vertex_touching.rs`) — an exact test
+/// needs 256-bit products (later work).
 #[derive(Clone, Debug)]
 struct Rule {
     /// The hops up to the stage where the boundary arises.
@@ -163,6 +165,12 @@ fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
         i128::from(p.y()) - i128::from(a.y()),
     );
     Sign::of_i128(ex * py - ey * px)
+}
+
+/// Whether `a` lies exactly at θ = 0 but the perturbation puts it just below 2π.
+fn wraps(a: &Angle) -> bool {
+    a.cmp_exact(&Angle::ZERO) == Ordering::Equal
+        && a.cmp_angle(&Angle::constant(Direction { x: 1, y: -1 })) == Ordering::Greater
 }
 
 fn cross(u: (i128, i128), v: (i128, i128)) -> i128 {
@@ -310,33 +318,36 @@ impl Tree<'_, '_> {
     }
 
     /// The direction `dir` from `eye` after the hops `hops`, mapped back to a direction
-    /// from the first hop's `prev` eye (`f64`).
+    /// from the first hop's `prev` eye (`f64`). Per hop the hit point `X = cur + t·d` on the
+    /// edge's line is taken relative to the previous eye as `(cur − prev) + t·d`, with the
+    /// numerator of `t` exact: no term is much larger than the result, so an eye next to
+    /// the edge loses no precision (`X − prev` as `(a − prev) + u·(b − a)` cancels there).
     fn map_dir(&self, hops: &[Hop], eye: QueryPoint, dir: (i128, i128)) -> (f64, f64) {
         let mut d = (dir.0 as f64, dir.1 as f64);
         let mut cur = eye;
         for hop in hops.iter().rev() {
             let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
             let e = diff(b, a);
-            let e = (e.0 as f64, e.1 as f64);
-            let n = diff(cur, a);
-            let n = (n.0 as f64, n.1 as f64);
-            let den = d.0 * e.1 - d.1 * e.0;
-            let u = if den == 0.0 {
-                0.5
+            let ef = (e.0 as f64, e.1 as f64);
+            let den = d.0 * ef.1 - d.1 * ef.0;
+            d = if den == 0.0 {
+                // Along the edge's line: its midpoint.
+                let ap = diff(a, hop.prev);
+                (ap.0 as f64 + 0.5 * ef.0, ap.1 as f64 + 0.5 * ef.1)
             } else {
-                (d.0 * n.1 - d.1 * n.0) / den
+                let t = cross(diff(a, cur), e) as f64 / den;
+                let cp = diff(cur, hop.prev);
+                (cp.0 as f64 + t * d.0, cp.1 as f64 + t * d.1)
             };
-            let ap = diff(a, hop.prev);
-            d = (ap.0 as f64 + u * e.0, ap.1 as f64 + u * e.1);
             cur = hop.prev;
         }
         d
     }
 
     /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it
-    /// points at an endpoint of the hop's edge, otherwise through the hit point on the
-    /// edge's line, computed in `f64` and rounded to the query grid (it only places the
-    /// range end; the error is below the grid step).
+    /// points at an endpoint of the hop's edge (or the hit point falls on or beyond one),
+    /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
+    /// only places the range end; the angular error is about 2⁻⁵² rad).
     fn map_end(&self, end: &Dir, hop: &Hop) -> Result<Dir, WalkError> {
         if let Some((v, _)) = end.vertex {
             if v == hop.a || v == hop.b {
@@ -351,13 +362,29 @@ impl Tree<'_, '_> {
             return Err(WalkError::Corrupt);
         }
         let u = cross(d, diff(hop.prev, a)) as f64 / den as f64;
-        let px = libm::round(a.x() as f64 + u * e.0 as f64) as i128;
-        let py = libm::round(a.y() as f64 + u * e.1 as f64) as i128;
-        let (mut vx, mut vy) = (px - i128::from(hop.next.x()), py - i128::from(hop.next.y()));
-        let lim = crate::geom::point::MAX_ABS_DIRECTION as i128;
-        while vx.abs() > lim || vy.abs() > lim {
-            vx /= 2;
-            vy /= 2;
+        // At or beyond an end of the edge (by rounding): that endpoint, exactly.
+        if u <= 0.0 || u >= 1.0 {
+            return Ok(self.toward(hop.next, if u <= 0.0 { hop.a } else { hop.b }));
+        }
+        // `P − next = (prev − next) + t·d` with `t = cross(a − prev, e) / den` (see
+        // `map_dir`) in `f64`, scaled so that its larger component is about 2⁵²: the
+        // direction keeps `f64` precision instead of the query grid's, so that a range far
+        // thinner than a grid step at the edge keeps its two ends apart.
+        let t = cross(diff(a, hop.prev), e) as f64 / den as f64;
+        let pn = diff(hop.prev, hop.next);
+        let (fx, fy) = (pn.0 as f64 + t * d.0 as f64, pn.1 as f64 + t * d.1 as f64);
+        let big = libm::fmax(libm::fabs(fx), libm::fabs(fy));
+        if !big.is_finite() || big == 0.0 {
+            return Err(WalkError::Corrupt);
+        }
+        let (_, exp) = libm::frexp(big);
+        let lim = crate::geom::point::MAX_ABS_DIRECTION as f64;
+        let (vx, vy) = (
+            libm::round(libm::scalbn(fx, 52 - exp)),
+            libm::round(libm::scalbn(fy, 52 - exp)),
+        );
+        if libm::fabs(vx) > lim || libm::fabs(vy) > lim {
+            return Err(WalkError::Corrupt);
         }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
         Ok(Dir {
@@ -366,51 +393,167 @@ impl Tree<'_, '_> {
         })
     }
 
+    /// Side of the line through `v` against the line through `eye`, both of direction `d`
+    /// turned counter-clockwise by an infinitesimal δ (larger than the symbolic
+    /// perturbation): `Positive` if `v`'s line lies left (above). A vertex exactly on the
+    /// eye's line falls below if it lies ahead of the eye (`cross(d + δd⊥, t·d) = −δt|d|²`),
+    /// rises above if behind; only a vertex at the eye itself falls back to the perturbation.
+    /// Bit budget: `|d| ≤ 2⁵³`, `|v − eye| ≤ 2⁵³`, cross and dot `< 2¹⁰⁷`, exact in `i128`.
+    fn side_after(&self, eye: QueryPoint, from: &Angle, v: usize, ccw: bool) -> Sign {
+        let d = from.vector();
+        let w = diff(self.qpoint(v), eye);
+        match Sign::of_i128(cross(d, w)) {
+            Sign::Zero => match Sign::of_i128(d.0 * w.0 + d.1 * w.1) {
+                Sign::Zero => from.offset_cmp_query(eye, ranked(self.scene, v)),
+                s if ccw => s.flip(),
+                s => s,
+            },
+            s => s,
+        }
+    }
+
+    /// Side of `chain` against the line through `eye` just after `from` (as
+    /// [`Tree::side_after`]): the lower chain is the lowest vertex line of its object, so
+    /// it lies below iff some vertex line does; the upper chain is the highest.
+    fn chain_after(&self, eye: QueryPoint, from: &Angle, chain: Chain, ccw: bool) -> Sign {
+        let Some(obj) = self.scene.object(chain.object) else {
+            return Sign::Zero;
+        };
+        let (first, n) = (obj.first_vertex(), obj.len());
+        let (some, none) = match chain.bound {
+            Bound::Lower => (Sign::Negative, Sign::Positive),
+            Bound::Upper => (Sign::Positive, Sign::Negative),
+        };
+        if (first..first + n).any(|v| self.side_after(eye, from, v, ccw) == some) {
+            some
+        } else {
+            none
+        }
+    }
+
     /// The cylinder with floor `m` containing the line through `eye` just after the range
-    /// start `from` (a scan over the cylinders: O(cylinders); the history's sheet-anchored
-    /// locate would make it logarithmic).
+    /// start `from` — turned by an infinitesimal that exceeds the symbolic perturbation, so
+    /// that everything exactly on the opening ray is behind (the range is open) — and the
+    /// angle to start walking from: the perturbed direction of the last tangent of the
+    /// cylinder's chains exactly on the opening ray, or `from` (the walk would otherwise
+    /// cross those tangents again).
     fn locate_floor(
         &self,
         eye: QueryPoint,
         m: ObjectId,
         from: &Dir,
-    ) -> Result<CylinderId, WalkError> {
+    ) -> Result<(CylinderId, Angle), WalkError> {
         let angle = &from.angle;
-        let offset = |chain: Chain| {
-            let v = tangent_vertex(self.scene, chain.object, angle, chain.bound);
-            match angle.offset_cmp_query(eye, ranked(self.scene, v)) {
-                // Only the vertex defining `from` lies on the trace at `from`. Just after,
-                // turning counter-clockwise, the line through a point ahead of the eye
-                // falls below the trace, one behind rises above.
-                Sign::Zero => match from.vertex {
-                    Some((w, ahead)) if w == v => {
-                        if ahead {
-                            Sign::Negative
-                        } else {
-                            Sign::Positive
-                        }
+        let id = match self.stack_floor(eye, m, angle) {
+            Some(id) => id,
+            None => self.scan_floor(eye, m, angle, true)?,
+        };
+        let c = self.complex.cylinder(id).ok_or(WalkError::Corrupt)?;
+        // The turned line lies past θ = 0: an opening ray exactly at θ = 0 that the
+        // perturbation puts just below 2π starts the walk at θ = 0 instead.
+        let mut theta = if wraps(angle) { Angle::ZERO } else { *angle };
+        for chain in [c.bottom, c.top].into_iter().flatten() {
+            if chain.object == m {
+                continue;
+            }
+            let (tangents, count) = crate::line_space::tangents_from(self.scene, chain.object, eye);
+            for &(h, _) in tangents.iter().take(count) {
+                let fwd = Angle::from_query(eye, ranked(self.scene, h));
+                for a in [fwd, fwd.reversed()] {
+                    if a.cmp_exact(angle) == Ordering::Equal
+                        && !wraps(&a)
+                        && a.cmp_angle(&theta) == Ordering::Greater
+                    {
+                        theta = a;
                     }
-                    _ => Sign::Zero,
-                },
-                s => s,
+                }
+            }
+        }
+        Ok((id, theta))
+    }
+
+    /// Whether the cylinder `c` contains the line through `eye` just after `from` (see
+    /// [`Tree::locate_floor`]): walls exactly at `from` lie behind it; a wall exactly at
+    /// θ = 0 that the perturbation puts just below 2π counts as 2π.
+    fn contains_after(&self, eye: QueryPoint, from: &Angle, c: &Cylinder, ccw: bool) -> bool {
+        let cmp_wall = |a: &Angle| {
+            if wraps(a) {
+                Ordering::Greater
+            } else {
+                a.cmp_exact(from)
             }
         };
-        let contains = |w: Wall, left: bool| match self.complex.wall_angle(self.scene, w) {
+        let wall = |w: Wall, left: bool| match self.complex.wall_angle(self.scene, w) {
             None => true,
-            Some(a) if left => a.cmp_angle(angle) == Ordering::Less,
-            Some(a) => angle.cmp_angle(&a) == Ordering::Less,
+            // Turned counter-clockwise, walls exactly at the angle are behind; clockwise,
+            // ahead.
+            Some(a) if left && ccw => cmp_wall(&a) != Ordering::Greater,
+            Some(a) if left => cmp_wall(&a) == Ordering::Less,
+            Some(a) if ccw => cmp_wall(&a) == Ordering::Greater,
+            Some(a) => cmp_wall(&a) != Ordering::Less,
         };
+        wall(c.left, true)
+            && wall(c.right, false)
+            && c.bottom
+                .is_none_or(|b| self.chain_after(eye, from, b, ccw) == Sign::Negative)
+            && c.top
+                .is_none_or(|t| self.chain_after(eye, from, t, ccw) == Sign::Positive)
+    }
+
+    /// The start cylinder found through the per-chain tilings: the cylinders with floor `m`
+    /// at `from` (perturbed) stack up from `m`'s lower chain; climb until the top chain lies
+    /// above the eye's line. O(log n) per tiling lookup plus the height of the stack.
+    /// `None` where something lies exactly on the opening ray and the perturbed angle and
+    /// the turned line disagree (the caller then scans).
+    fn stack_floor(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> Option<CylinderId> {
+        let lower = Chain {
+            object: m,
+            bound: Bound::Lower,
+        };
+        if self.chain_after(eye, from, lower, true) != Sign::Negative {
+            return None;
+        }
+        // The tilings are searched at the perturbed angle, on the turned line's lap.
+        let probe = if wraps(from) { Angle::ZERO } else { *from };
+        let mut id = self
+            .complex
+            .across(self.scene, lower, Side::Above, Layer::After, &probe)?;
+        for _ in 0..self.complex.cylinders().len() {
+            let c = self.complex.cylinder(id)?;
+            if c.floor != Some(m) {
+                return None;
+            }
+            let top = match c.top {
+                Some(t) if self.chain_after(eye, from, t, true) != Sign::Positive => t,
+                _ => return self.contains_after(eye, from, c, true).then_some(id),
+            };
+            // Above a lower chain its object is crossed: the layer ending there.
+            let layer = match top.bound {
+                Bound::Lower => Layer::Before,
+                Bound::Upper => Layer::Around,
+            };
+            id = self
+                .complex
+                .across(self.scene, top, Side::Above, layer, &probe)?;
+        }
+        None
+    }
+
+    /// [`Tree::stack_floor`] by a scan over the cylinders: O(cylinders), for the
+    /// degenerate cases only. With `ccw` false, the line turned clockwise (just before
+    /// `from`).
+    fn scan_floor(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        from: &Angle,
+        ccw: bool,
+    ) -> Result<CylinderId, WalkError> {
         self.complex
             .cylinders()
             .iter()
             .enumerate()
-            .find(|(_, c)| {
-                c.floor == Some(m)
-                    && contains(c.left, true)
-                    && contains(c.right, false)
-                    && c.bottom.is_none_or(|b| offset(b) == Sign::Negative)
-                    && c.top.is_none_or(|t| offset(t) == Sign::Positive)
-            })
+            .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw))
             .and_then(|(i, _)| CylinderId::from_index(i))
             .ok_or(WalkError::NoStart)
     }
@@ -425,8 +568,22 @@ impl Tree<'_, '_> {
         to: &Dir,
         first: Boundary,
     ) -> Result<Vec<Piece>, WalkError> {
-        let start = self.locate_floor(eye, m, from)?;
-        let lap = if to.angle.cmp_angle(&from.angle) == Ordering::Greater {
+        let (start, theta) = match self.locate_floor(eye, m, from) {
+            // Both ends placed on one direction: the range is thinner than `f64` resolves
+            // and may lie on either side of it. One piece, seen as just before its end
+            // (the end, exact where it points at a vertex, is the better placed one).
+            Err(WalkError::NoStart) if from.angle.cmp_exact(&to.angle) == Ordering::Equal => {
+                let id = self.scan_floor(eye, m, &to.angle, false)?;
+                return Ok(alloc::vec![Piece {
+                    from: *from,
+                    to: *to,
+                    ceiling: self.complex.ceiling(id),
+                    boundary: first,
+                }]);
+            }
+            r => r?,
+        };
+        let lap = if to.angle.cmp_angle(&theta) == Ordering::Greater {
             0
         } else {
             1
@@ -437,7 +594,7 @@ impl Tree<'_, '_> {
             eye,
             Anchor::Floor(m),
             start,
-            from.angle,
+            theta,
             Some(Position {
                 lap,
                 angle: to.angle,
@@ -791,7 +948,7 @@ impl Tree<'_, '_> {
                         let wf = (w.0 as f64, w.1 as f64);
                         let c = d.0 * wf.1 - d.1 * wf.0;
                         let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
-                        (libm::fabs(c) <= 1e-10 * scale, d.0 * wf.0 + d.1 * wf.1)
+                        (libm::fabs(c) <= 1e-12 * scale, d.0 * wf.0 + d.1 * wf.1)
                     };
                     if !on || along <= 0.0 || best.is_some_and(|(b, _)| b <= along) {
                         continue;

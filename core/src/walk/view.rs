@@ -1,12 +1,13 @@
 //! The view from a point: the exact angular intervals of the object seen, from a walk.
 
+#[cfg(feature = "alloc")]
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
 use super::WalkError;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
-use crate::partition::Complex;
+use crate::partition::{Complex, Storage};
 use crate::scene::{ObjectId, SceneRef};
 
 /// One interval of a view: directions from `start` (inclusive of nothing: boundaries are
@@ -31,69 +32,222 @@ pub struct ViewInterval {
 ///
 /// The complex must be built from a scene without screens (views treat screens as
 /// transparent; walking through them needs secondary traces).
-pub fn view(
-    complex: &Complex,
+#[cfg(feature = "alloc")]
+pub fn view<S: Storage>(
+    complex: &Complex<S>,
     scene: &SceneRef<'_>,
     q: QueryPoint,
 ) -> Result<Vec<ViewInterval>, WalkError> {
-    // Raw events in perturbed order: (angle, tangent vertex, ceiling after).
-    let mut first: Option<Option<ObjectId>> = None;
-    let mut events: Vec<(Angle, usize, Option<ObjectId>)> = Vec::new();
+    let mut out = Vec::new();
+    sweep(complex, scene, q, &mut out)?;
+    Ok(out)
+}
+
+/// An upper bound of the number of intervals of any view in a scene of `objects` objects:
+/// the lines from a point are tangent to each object twice with the tangent vertex ahead,
+/// and every boundary is such a tangent.
+pub const fn view_capacity(objects: usize) -> usize {
+    2 * objects + 1
+}
+
+/// `view` into the caller's buffer, without allocating: returns how many intervals it
+/// wrote (the prefix of `out`), or [`WalkError::BufferFull`]. A buffer of
+/// [`view_capacity`]`(objects)` intervals always suffices.
+///
+/// RAM: `out.len() · size_of::<ViewInterval>()` for the output, plus the stack of the walk
+/// (no recursion; see `ARCHITECTURE.md`, "Storage and walk RAM").
+pub fn view_into<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    out: &mut [ViewInterval],
+) -> Result<usize, WalkError> {
+    let mut sink = SliceSink { out, len: 0 };
+    sweep(complex, scene, q, &mut sink)?;
+    Ok(sink.len)
+}
+
+/// Where [`sweep`] puts the intervals.
+trait Sink {
+    fn push(&mut self, i: ViewInterval) -> Result<(), WalkError>;
+    /// Moves the last interval to the front.
+    fn last_to_front(&mut self);
+    fn is_empty(&self) -> bool;
+}
+
+#[cfg(feature = "alloc")]
+impl Sink for Vec<ViewInterval> {
+    fn push(&mut self, i: ViewInterval) -> Result<(), WalkError> {
+        Vec::push(self, i);
+        Ok(())
+    }
+    fn last_to_front(&mut self) {
+        self.rotate_right(1);
+    }
+    fn is_empty(&self) -> bool {
+        Vec::is_empty(self)
+    }
+}
+
+struct SliceSink<'o> {
+    out: &'o mut [ViewInterval],
+    len: usize,
+}
+
+impl Sink for SliceSink<'_> {
+    fn push(&mut self, i: ViewInterval) -> Result<(), WalkError> {
+        let slot = self.out.get_mut(self.len).ok_or(WalkError::BufferFull {
+            needed: self.len + 1,
+        })?;
+        *slot = i;
+        self.len += 1;
+        Ok(())
+    }
+    fn last_to_front(&mut self) {
+        if let Some(used) = self.out.get_mut(..self.len) {
+            used.rotate_right(1);
+        }
+    }
+    fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// The first event of a cluster of events on one exact ray, and the ceiling after its
+/// last event.
+#[derive(Clone, Copy)]
+struct Cluster {
+    angle: Angle,
+    vertex: usize,
+    after: Option<ObjectId>,
+}
+
+/// The view as a stream over one walk, in constant space besides the output.
+///
+/// The events come in perturbed order. Events exactly at θ = 0 are perturbed either just
+/// above 0 (the leading run `P`, first in the walk) or just below 2π (the trailing run `Z`,
+/// last): together they are the first cluster of the view (`Z` then `P`), which is only
+/// known at the end of the walk, so it is written last and moved to the front. Every other
+/// cluster (events on one exact ray) is written as soon as the next one starts.
+fn sweep<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    out: &mut impl Sink,
+) -> Result<(), WalkError> {
+    let on_zero = |a: &Angle| a.cmp_exact(&Angle::ZERO) == Ordering::Equal;
+    let mut start_object: Option<Option<ObjectId>> = None;
+    // The leading run at θ = 0 (P), the current cluster of the middle, the trailing run (Z).
+    let mut lead: Option<Cluster> = None;
+    let mut middle: Option<Cluster> = None;
+    let mut tail: Option<Cluster> = None;
+    let mut in_lead = true;
+    // The object seen before the current middle cluster.
+    let mut seen: Option<ObjectId> = None;
+    let mut result: Result<(), WalkError> = Ok(());
     complex.walk_trace(scene, q, |s| {
         let ceiling = complex.ceiling(s.cylinder);
-        match (first, s.vertex) {
-            (None, _) => first = Some(ceiling),
-            (Some(_), Some(v)) if s.ahead => events.push((s.angle, v, ceiling)),
-            _ => {}
+        if start_object.is_none() {
+            start_object = Some(ceiling);
+            seen = ceiling;
+            return;
+        }
+        let (Some(v), true) = (s.vertex, s.ahead) else {
+            return;
+        };
+        let event = Cluster {
+            angle: s.angle,
+            vertex: v,
+            after: ceiling,
+        };
+        if in_lead && on_zero(&s.angle) {
+            let c = lead.get_or_insert(event);
+            c.after = ceiling;
+            seen = ceiling;
+            return;
+        }
+        in_lead = false;
+        if let Some(t) = &mut tail {
+            t.after = ceiling;
+            return;
+        }
+        match &mut middle {
+            Some(m) if m.angle.cmp_exact(&s.angle) == Ordering::Equal => m.after = ceiling,
+            _ => {
+                if let Some(m) = middle.take() {
+                    if result.is_ok() {
+                        result = emit(scene, q, &m, &mut seen, out);
+                    }
+                }
+                if on_zero(&s.angle) {
+                    tail = Some(event);
+                } else {
+                    middle = Some(event);
+                }
+            }
         }
     })?;
-    let start_object = first.flatten();
-
-    // Events exactly at θ = 0 may be perturbed to just below 2π: move them to the front so
-    // that every exact ray's events are contiguous.
-    let at_zero = events
-        .iter()
-        .rev()
-        .take_while(|e| e.0.cmp_exact(&Angle::ZERO) == Ordering::Equal)
-        .count();
-    let mut seen = match events.len().checked_sub(at_zero + 1) {
-        Some(k) if at_zero > 0 => events[k].2,
-        _ => start_object,
-    };
-    events.rotate_right(at_zero);
-
-    // Cluster events on exactly the same ray; keep a boundary where the object changes.
-    let mut out: Vec<ViewInterval> = Vec::new();
-    let mut i = 0;
-    while i < events.len() {
-        let mut j = i + 1;
-        while j < events.len() && events[j].0.cmp_exact(&events[i].0) == Ordering::Equal {
-            j += 1;
-        }
-        let after = events[j - 1].2;
-        if after != seen {
-            let vertex =
-                nearest_on_ray(scene, q, &events[i].0, [seen, after]).or(Some(events[i].1));
-            out.push(ViewInterval {
-                start: events[i].0,
-                object: after,
-                start_vertex: vertex,
-            });
-            seen = after;
-        }
-        i = j;
+    result?;
+    if let Some(m) = middle.take() {
+        emit(scene, q, &m, &mut seen, out)?;
     }
-    // The interval through θ = 0: merge with the first if the object at 0 is the one seen
-    // at the end; otherwise θ = 0 itself cannot be a boundary (no event lies exactly there
-    // in the perturbed order, and the walk starts with the object at 0⁺).
+    let start_object = start_object.flatten();
+    // The first cluster: Z then P, seen after the last middle cluster (or P, seen at the
+    // start of the walk).
+    let first = match (tail, lead) {
+        (Some(t), Some(p)) => Some((
+            Cluster {
+                after: p.after,
+                ..t
+            },
+            seen,
+        )),
+        (Some(t), None) => {
+            // The walk returns to its start cylinder, so after Z the start object is seen
+            // again; the middle clusters were written on that assumption.
+            if t.after != start_object {
+                return Err(WalkError::Corrupt);
+            }
+            Some((t, seen))
+        }
+        (None, Some(p)) => Some((p, start_object)),
+        (None, None) => None,
+    };
+    if let Some((c, mut before)) = first {
+        let wrote = before != c.after;
+        emit(scene, q, &c, &mut before, out)?;
+        if wrote {
+            out.last_to_front();
+        }
+    }
     if out.is_empty() {
         out.push(ViewInterval {
             start: Angle::ZERO,
             object: start_object,
             start_vertex: None,
-        });
+        })?;
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Writes the boundary of a cluster if the object seen changes there.
+fn emit(
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    c: &Cluster,
+    seen: &mut Option<ObjectId>,
+    out: &mut impl Sink,
+) -> Result<(), WalkError> {
+    if c.after != *seen {
+        let vertex = nearest_on_ray(scene, q, &c.angle, [*seen, c.after]).or(Some(c.vertex));
+        out.push(ViewInterval {
+            start: c.angle,
+            object: c.after,
+            start_vertex: vertex,
+        })?;
+        *seen = c.after;
+    }
+    Ok(())
 }
 
 /// The vertex nearest to `q` lying exactly on the ray from `q` in direction `angle`, among

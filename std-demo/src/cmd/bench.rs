@@ -29,6 +29,12 @@ pub enum Bench {
     Build(BuildArgs),
     /// Time per full view from points of a scene.
     Views(ViewsArgs),
+    /// Run time against error: the complex against the quadtree and BVH ray casters.
+    Error(super::bench_error::Args),
+    /// Numerical-stability stress test: exact against naive f64 predicates.
+    Stability(super::stability::Args),
+    /// The paper's experiments (Figs. 9–19): every table and SVG plot in one run.
+    Figures(super::figures::Args),
 }
 
 /// Arguments of `vcx bench build`.
@@ -86,18 +92,26 @@ pub fn run(bench: &Bench) -> Result<(), Failure> {
     match bench {
         Bench::Build(a) => build(a),
         Bench::Views(a) => views(a),
+        Bench::Error(a) => super::bench_error::run(a),
+        Bench::Stability(a) => super::stability::run(a),
+        Bench::Figures(a) => super::figures::run(a),
     }
 }
 
-fn internal(e: impl core::fmt::Display) -> Failure {
+pub(crate) fn internal(e: impl core::fmt::Display) -> Failure {
     Failure {
         message: format!("internal: {e}"),
         code: super::build::EXIT_INTERNAL,
     }
 }
 
-fn bytes(c: &Complex) -> usize {
+pub(crate) fn bytes(c: &Complex) -> usize {
     core::mem::size_of_val(c.cylinders()) + core::mem::size_of_val(c.vertices())
+}
+
+/// History bytes: every node's cylinder record plus 4 bytes per link.
+pub(crate) fn history_bytes(h: &vcx::partition::HistoryStats) -> usize {
+    h.nodes * core::mem::size_of::<Cylinder>() + h.links * 4
 }
 
 fn build(a: &BuildArgs) -> Result<(), Failure> {
@@ -151,7 +165,7 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
                 "history_nodes": h.map(|h| h.nodes),
                 "history_links": h.map(|h| h.links),
                 "history_depth": h.map(|h| h.depth),
-                "history_bytes": h.map(|h| h.nodes * core::mem::size_of::<Cylinder>() + h.links * 4),
+                "history_bytes": h.map(|h| history_bytes(&h)),
             });
             out.push_str(&line.to_string());
             out.push('\n');
@@ -162,7 +176,9 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
 }
 
 fn views(a: &ViewsArgs) -> Result<(), Failure> {
-    let file = super::check::load(&a.scene)?;
+    // JSON or `.vcx`: a stored complex is used where it is the one needed (crate::input).
+    let input = crate::input::load(&a.scene)?;
+    let file = &input.file;
     let full = file.scene.as_ref();
     let keep = full
         .objects()
@@ -177,7 +193,7 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         SubScene::new(full, (0..full.len() as u32).map(ObjectId))
     };
     let scene = sub.as_ref();
-    let complex = build_by_sweep(&scene).map_err(internal)?;
+    let complex = input.complex_for(&scene).map_err(internal)?;
     let points: Vec<QueryPoint> = match &a.points {
         Some(path) => super::view::read_points(path)?
             .into_iter()

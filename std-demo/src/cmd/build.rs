@@ -19,8 +19,21 @@
 //!   partition without the history DAG; the randomized incremental construction will fill
 //!   these.
 //!
-//! Nothing is written to a file yet: options for the randomized construction (`--seed`)
-//! and for the complex file format (`-o`) come with them.
+//! With `-o FILE.vcx` the scene and complex are also written in the binary complex format
+//! (`docs/format.md`; the header records `--seed` for the randomized construction) and the
+//! summary ends with `; wrote FILE (B bytes)`, or `; wrote FILE (B bytes, history H
+//! bytes)` (`--stats-json`: keys `file_bytes`, `file_history_bytes`, the latter `null`
+//! without history). `--history` says whether the file stores the construction history
+//! (the point-location structure of §4.2):
+//!
+//! * `auto` (default): when a walk can need point location from a secondary ray — the
+//!   scene has a mirror, a refractive object or a screen — unless `--method sweep` is
+//!   given (the sweep builds no history);
+//! * `always`: always (with `--method sweep`: an error, exit status 2);
+//! * `never`: never (primary walks start without it).
+//!
+//! A history is written only with the randomized construction, whose live partition is the
+//! file's complex. The scene may itself be a `.vcx` file (its scene is rebuilt).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -38,6 +51,18 @@ pub const EXIT_INTERNAL: u8 = 3;
 pub const HISTORY_NOT_BUILT: &str = "not built: the rotational sweep builds the canonical \
      partition without history (use --method ric)";
 
+/// Whether `-o` stores the construction history.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum HistoryChoice {
+    /// When the scene has mirrors, refractive objects or screens (a walk can need point
+    /// location from a secondary ray).
+    Auto,
+    /// Always.
+    Always,
+    /// Never.
+    Never,
+}
+
 /// How to build the complex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
@@ -50,7 +75,7 @@ pub enum Method {
 /// Arguments of `vcx build`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (JSON).
+    /// The scene file (JSON, or a binary complex file `.vcx`).
     pub scene: PathBuf,
     /// Print the statistics as one JSON object instead of a summary line.
     #[arg(long)]
@@ -61,9 +86,25 @@ pub struct Args {
     /// Insert the screens first, then the other objects in random order (§7).
     #[arg(long)]
     pub screens_first: bool,
-    /// Construction method.
-    #[arg(long, value_enum, default_value_t = Method::Ric)]
-    pub method: Method,
+    /// Construction method [default: ric].
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
+    /// Write the scene and complex to this binary complex file (`docs/format.md`).
+    #[arg(short = 'o', long = "output", value_name = "FILE.vcx")]
+    pub output: Option<PathBuf>,
+    /// With `-o`: store the construction history in the file (`auto`: when the scene has
+    /// mirrors, refractive objects or screens).
+    #[arg(long, value_enum, default_value_t = HistoryChoice::Auto)]
+    pub history: HistoryChoice,
+}
+
+/// Whether a walk in this scene can need point location from a secondary ray: it has a
+/// mirror, a refractive object or a screen.
+pub fn needs_history(scene: &SceneRef<'_>) -> bool {
+    scene
+        .objects()
+        .iter()
+        .any(|o| o.material != vcx::Material::Opaque)
 }
 
 /// A built complex and how long building it took.
@@ -131,15 +172,80 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         first,
         ..Default::default()
     };
-    let built = build_with(&args.scene, &scene, args.method, &options)?;
+    let write_history = args.output.is_some()
+        && match args.history {
+            HistoryChoice::Never => false,
+            HistoryChoice::Auto => args.method != Some(Method::Sweep) && needs_history(&scene),
+            HistoryChoice::Always => {
+                if args.method == Some(Method::Sweep) {
+                    return Err(Failure::bad_input(
+                        "--history always needs the randomized construction: the rotational \
+                         sweep (--method sweep) builds no history"
+                            .to_string(),
+                    ));
+                }
+                true
+            }
+        };
+    let method = if write_history {
+        Method::Ric
+    } else {
+        args.method.unwrap_or(Method::Ric)
+    };
+    let built = build_with(&args.scene, &scene, method, &options)?;
+    let written = match &args.output {
+        Some(out) => Some((out, write_vcx(out, &scene, &built, write_history, args)?)),
+        None => None,
+    };
     let text = if args.stats_json {
-        let mut line = stats_json(scene.len(), &built).to_string();
+        let mut stats = stats_json(scene.len(), &built);
+        if let Some((_, (bytes, history))) = written {
+            stats["file_bytes"] = json!(bytes);
+            stats["file_history_bytes"] = json!(history);
+        }
+        let mut line = stats.to_string();
         line.push('\n');
         line
     } else {
-        format!("{}\n", summary(&args.scene, scene.len(), &built))
+        let mut line = summary(&args.scene, scene.len(), &built);
+        if let Some((out, (bytes, history))) = written {
+            let history = history.map_or(String::new(), |h| format!(", history {h} bytes"));
+            line.push_str(&super::one_line(&format!(
+                "; wrote {} ({bytes} bytes{history})",
+                out.display()
+            )));
+        }
+        format!("{line}\n")
     };
     write_stdout(&text)
+}
+
+/// Encodes the scene and complex (and the history if `with_history`) and writes the file;
+/// returns its length in bytes and the history part's, if written.
+fn write_vcx(
+    out: &Path,
+    scene: &SceneRef<'_>,
+    built: &Built,
+    with_history: bool,
+    args: &Args,
+) -> Result<(usize, Option<usize>), Failure> {
+    let options = vcx::format::EncodeOptions {
+        seed: built.history.is_some().then_some(args.seed),
+        compacted: built.history.is_some(),
+    };
+    let history = built.history.as_ref().filter(|_| with_history);
+    let bytes =
+        vcx::format::encode(scene, &built.complex, history, &options).map_err(|e| Failure {
+            message: format!("{}: internal: cannot encode: {e}", args.scene.display()),
+            code: EXIT_INTERNAL,
+        })?;
+    std::fs::write(out, &bytes)
+        .map_err(|e| Failure::bad_input(format!("cannot write {}: {e}", out.display())))?;
+    let history_bytes = match vcx::format::Header::read_unchecked(&bytes) {
+        Ok(h) if h.has_history() => Some(h.history_bytes as usize),
+        _ => None,
+    };
+    Ok((bytes.len(), history_bytes))
 }
 
 /// The `--stats-json` object.

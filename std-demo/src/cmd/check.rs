@@ -1,31 +1,37 @@
-//! `vcx check SCENE.json`: validate a scene file and print one summary line.
+//! `vcx check SCENE.json`: validate a scene file and print one summary line. A binary
+//! complex file (`.vcx`) is decoded and validated, scene and complex.
 
 use std::path::PathBuf;
 
 use vcx::Material;
-use vcx_demo::scene_file::{self, SceneFile, SceneFileError, GRID};
+use vcx_demo::scene_file::{SceneFile, GRID};
 
 use super::{write_stdout, Failure};
 
 /// Arguments of `vcx check`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (JSON).
+    /// The scene file (JSON, or a binary complex file `.vcx`).
     pub scene: PathBuf,
 }
 
 /// Loads and validates the scene; prints the summary.
 pub fn run(args: &Args) -> Result<(), Failure> {
-    let file = load(&args.scene)?;
-    write_stdout(&format!("{}\n", summary(&args.scene, &file)))
+    let input = crate::input::load(&args.scene)?;
+    let mut line = summary(&args.scene, &input.file);
+    if let Some(s) = &input.stored {
+        line.push_str(&format!(
+            "; complex file: {} bytes, {} complex vertices, {} cylinders (validated)",
+            s.bytes, s.header.complex_vertices, s.header.cylinders
+        ));
+    }
+    write_stdout(&format!("{line}\n"))
 }
 
-/// Loads a scene file; the failure names the file.
+/// Loads a scene file — JSON, or the scene of a binary complex file (`.vcx`, see
+/// [`crate::input`]); the failure names the file.
 pub fn load(path: &std::path::Path) -> Result<SceneFile, Failure> {
-    scene_file::load(path).map_err(|e| match e {
-        SceneFileError::Io { .. } => Failure::bad_input(e.to_string()),
-        _ => Failure::bad_input(format!("{}: {e}", path.display())),
-    })
+    crate::input::load(path).map(|input| input.file)
 }
 
 /// `PATH: N objects (opaque a, mirror b, refractive c, screen d), V vertices,

@@ -118,7 +118,10 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         )));
     }
     let world = match &args.scene {
-        Some(path) => World::load(path, args.screens),
+        // JSON or `.vcx` (crate::input); the demo rebuilds the complexes it walks.
+        Some(path) => crate::input::load(path)
+            .map_err(|f| f.message)
+            .and_then(|i| World::new(i.file, path.display().to_string(), args.screens)),
         None => World::builtin().and_then(|mut w| {
             if args.screens {
                 w.rebuild(true)?;

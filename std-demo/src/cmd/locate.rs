@@ -1,9 +1,11 @@
 //! `vcx locate SCENE.json --at X,Y --dir DX,DY [--json]`: what a ray sees ahead and behind.
 //!
-//! Builds the complex by randomized incremental construction (as `vcx build` does, seed 0,
-//! validated; a failure is internal, exit status 3) and locates the ray from `(X, Y)` in
-//! direction `(DX, DY)` through the construction history (the paper's §4.2): the live
-//! cylinder that contains it, reported by its history node id. Its ceiling is the first object the ray hits (**forward**), its floor
+//! Locates the ray from `(X, Y)` in direction `(DX, DY)` through the construction history
+//! (the paper's §4.2): the live cylinder that contains it, reported by its history node id.
+//! The history is the one stored in a `.vcx` file (`vcx build --history`), used as is;
+//! otherwise it is built by randomized incremental construction (as `vcx build` does, with
+//! the seed a `.vcx` file records, else seed 0; validated; a failure is internal, exit
+//! status 3). Its ceiling is the first object the ray hits (**forward**), its floor
 //! the first object hit looking the opposite way (**backward**); `null` / "nothing" means
 //! the ray escapes to infinity. Object ids are indices in the scene file's `objects`.
 //!
@@ -44,7 +46,8 @@ use vcx::partition::BuildOptions;
 /// Arguments of `vcx locate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (JSON).
+    /// The scene file (JSON, or a binary complex file `.vcx`: its stored history is used;
+    /// without one the history is rebuilt from the file's scene).
     pub scene: PathBuf,
     /// The ray's origin, `X,Y` in scene units.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
@@ -68,25 +71,40 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let (d, exact) = direction_from_f64(dx, dy)
         .map_err(|e| Failure::bad_input(format!("--dir {:?}: {}", args.dir, e.message(dx, dy))))?;
 
-    let file = super::check::load(&args.scene)?;
+    let input = crate::input::load(&args.scene)?;
+    let file = &input.file;
     let scene = file.scene.as_ref();
     let at = format!("({}, {})", number(x), number(y));
     // A point in an object needs no complex.
     if let Some(l) = point_in_scene(&scene, q) {
-        return Err(in_object(&args.scene, &at, &file, l));
+        return Err(in_object(&args.scene, &at, file, l));
     }
-    let built = build_with(&args.scene, &scene, Method::Ric, &BuildOptions::default())?;
     let internal = |what: &str| Failure {
         message: format!("{}: internal: {what}", args.scene.display()),
         code: EXIT_INTERNAL,
     };
     if let Some(l) = vcx::partition::point_in_scene(&scene, q) {
-        return Err(in_object(&args.scene, &at, &file, l));
+        return Err(in_object(&args.scene, &at, file, l));
     }
-    let history = built
-        .history
-        .as_ref()
-        .ok_or_else(|| internal("no history"))?;
+    let built;
+    let history = match input.history_for(&scene) {
+        Some(h) => h,
+        None => {
+            let options = BuildOptions {
+                seed: input
+                    .stored
+                    .as_ref()
+                    .and_then(|s| s.header.seed)
+                    .unwrap_or(0),
+                ..Default::default()
+            };
+            built = build_with(&args.scene, &scene, Method::Ric, &options)?;
+            built
+                .history
+                .as_ref()
+                .ok_or_else(|| internal("no history"))?
+        }
+    };
     // Point location through the history of the randomized construction (§4.2).
     let (cylinder, c) = history
         .locate(&scene, q, d)
@@ -106,8 +124,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             args.scene.display(),
             number(dx),
             number(dy),
-            describe(&file, forward),
-            describe(&file, backward),
+            describe(file, forward),
+            describe(file, backward),
             cylinder.index(),
         );
         if !exact {

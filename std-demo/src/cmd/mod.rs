@@ -1,11 +1,16 @@
 //! One module per subcommand. Each `run` returns `Result<(), Failure>`; `main` reports.
 
 pub mod bench;
+pub mod bench_error;
 pub mod build;
 pub mod check;
 pub mod demo;
+pub mod figures;
 pub mod gen;
+pub mod inspect;
 pub mod locate;
+pub mod render;
+pub mod stability;
 pub mod view;
 
 use std::io::Write;
@@ -52,23 +57,28 @@ pub fn one_line(s: &str) -> String {
 /// status 101. There should be no panics; this is the last resort.
 pub fn install_panic_hook() {
     std::panic::set_hook(Box::new(|info| {
-        let payload = info.payload();
-        let what = payload
-            .downcast_ref::<&str>()
-            .copied()
-            .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
-            .unwrap_or("unknown cause");
-        let place = info
-            .location()
-            .map(|l| format!(" at {}:{}", l.file(), l.line()))
-            .unwrap_or_default();
         let _ = writeln!(
             std::io::stderr(),
-            "error: internal error (a bug in vcx, please report it): {}{place}",
-            one_line(what)
+            "error: internal error (a bug in vcx, please report it): {}",
+            panic_message(info)
         );
         std::process::exit(i32::from(EXIT_PANIC));
     }));
+}
+
+/// A panic's message and place on one line.
+pub fn panic_message(info: &std::panic::PanicHookInfo<'_>) -> String {
+    let payload = info.payload();
+    let what = payload
+        .downcast_ref::<&str>()
+        .copied()
+        .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+        .unwrap_or("unknown cause");
+    let place = info
+        .location()
+        .map(|l| format!(" at {}:{}", l.file(), l.line()))
+        .unwrap_or_default();
+    one_line(&format!("{what}{place}"))
 }
 
 /// Writes `text` to stdout. A closed pipe (`vcx gen … | head`) is not an error.

@@ -51,7 +51,7 @@ use vcx::walk::{ray_tree, view, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, QueryPoint, SceneRef, SubScene};
 use vcx_demo::SceneFile;
 
-use super::build::{build_checked, EXIT_INTERNAL};
+use super::build::EXIT_INTERNAL;
 use super::locate::{describe, in_object, number, parse_pair, query_point};
 use super::{write_stdout, Failure};
 
@@ -158,12 +158,14 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         (None, None) => return Err(Failure::bad_input("--at or --at-file is required")),
     };
 
-    let file = super::check::load(&args.scene)?;
+    // JSON or `.vcx`: a stored complex is used where it is the one needed (crate::input).
+    let input = crate::input::load(&args.scene)?;
+    let file = &input.file;
     let scene = file.scene.as_ref();
     // Screens count here: a viewpoint inside a screen is an error too.
     for p in &points {
         if let Some(l) = point_in_scene(&scene, p.q) {
-            return Err(located(&args.scene, p, &file, l));
+            return Err(located(&args.scene, p, file, l));
         }
     }
     let non_screen_ids = scene
@@ -177,9 +179,9 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     // Depth 0 walks the complex of the scene without its screens; ray trees need the
     // screens in the complex (secondary walks continue behind them).
     let built = if depth == 0 {
-        build_checked(&args.scene, &sub_scene)?
+        input.built(&args.scene, &sub_scene)?
     } else {
-        build_checked(&args.scene, &scene)?
+        input.built(&args.scene, &scene)?
     };
 
     let mut text = String::new();
@@ -194,7 +196,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
                 code: EXIT_INTERNAL,
             })?;
             let full = tree_rows(&scene, &tree);
-            emit(args, &file, p, i, range, full, &mut text);
+            emit(args, file, p, i, range, full, &mut text);
             continue;
         }
         let intervals = match view(&built.complex, &sub_scene, p.q) {
@@ -209,7 +211,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
                     },
                     other => other,
                 };
-                return Err(located(&args.scene, p, &file, l));
+                return Err(located(&args.scene, p, file, l));
             }
             Err(e) => {
                 return Err(Failure {
@@ -223,7 +225,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             }
         };
         let full = full_rows(&scene, &sub, &intervals);
-        emit(args, &file, p, i, range, full, &mut text);
+        emit(args, file, p, i, range, full, &mut text);
     }
     write_stdout(&text)
 }

@@ -1,0 +1,1365 @@
+//! `vcx bench figures [--quick] [--out DIR]`: the paper's experiments (Cho & Forsyth 1999,
+//! §7, Figs. 9–19) measured on this machine in one run, as tables and SVG plots in `DIR`
+//! (default `bench-out/`) and `DIR/BENCHMARKS.generated.md` (every table, the machine, the
+//! date and the command line). `--quick` runs every figure at smaller sizes (CI smoke use);
+//! the environment variable `VCX_FIGURES_TINY=1` shrinks them further (for the CLI test).
+//!
+//! Every figure is one [`Figure`] entry of [`FIGURES`]: a name, a title and a function that
+//! measures, returning one table and its plots. Other benchmarks add their figures by
+//! appending entries. Produced here (issue 6, item 3; item 5 is this command):
+//!
+//! * Figs. 9–10: complex and history size and build time against n, grid scene;
+//! * Fig. 11: frames per second along a trajectory against n, grid scene;
+//! * Figs. 12–13: hall of mirrors, time per frame and scene complexity against depth;
+//! * Figs. 14–15: the mixed scene against n at depth 5;
+//! * Fig. 16: active set (cylinders touched per frame) against n, grid scene;
+//! * Figs. 17–19: screens placed kd-tree fashion and inserted first: size, build time and
+//!   frame rate against the number of screens.
+//!
+//! Measured elsewhere and to be appended as entries by their owners: the classical ray
+//! casters of Figs. 12–15 and run time against coverage error (item 2, `vcx bench error`),
+//! and the numerical-stability stress test (item 4, `vcx bench stability`).
+//!
+//! A frame is the exact full 360° view (or ray tree) from a viewpoint of the built-in
+//! circuit ([`vcx_demo::demo::trajectory::circuit`], room capped at 1/2 unit): the core has no walk restricted to a
+//! field of view, and turning intervals into 800 columns is drawing, not walking, so it
+//! is not timed. Times use [`Instant`]; every frame is timed once per pass, its time is
+//! the median over the passes, and the frame rate is frames over the summed frame times.
+//! Scenes and insertion orders use fixed seeds, so everything but the times is the same on
+//! every run.
+
+use core::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use plotters::prelude::*;
+use vcx::geom::Point;
+use vcx::partition::{build_by_sweep, BuildOptions, Complex, History};
+use vcx::{Material, ObjectId, QueryPoint, SceneRef};
+use vcx_demo::demo::World;
+use vcx_demo::generate::{generate, SceneKind};
+use vcx_demo::scene_file::{ObjectSpec, SceneFile};
+
+use super::bench::{bytes, history_bytes, internal};
+use super::{write_stdout, Failure};
+
+/// Arguments of `vcx bench figures`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Smaller sizes (every plot in under 2 minutes), for CI smoke use.
+    #[arg(long)]
+    pub quick: bool,
+    /// Directory for the SVG files and `BENCHMARKS.generated.md` (created if missing).
+    #[arg(long, default_value = "bench-out")]
+    pub out: PathBuf,
+}
+
+/// One figure (or group of figures sharing a table): measured by `run`.
+pub(crate) struct Figure {
+    /// Short name, used in progress output.
+    pub name: &'static str,
+    /// Section title in the markdown.
+    pub title: &'static str,
+    /// Measures and returns the table and the plots.
+    pub run: fn(&Sizes, &mut Progress) -> Result<Output, Failure>,
+}
+
+/// What a figure produces: one table, with a caption, and its plots.
+pub(crate) struct Output {
+    /// Says what was measured and how (markdown).
+    pub caption: String,
+    /// The table.
+    pub table: Table,
+    /// The plots, written as SVG files.
+    pub plots: Vec<Plot>,
+}
+
+/// A markdown table.
+pub(crate) struct Table {
+    /// Column headers; a leading `<` left-aligns the column (the `<` is not printed).
+    pub header: Vec<&'static str>,
+    /// Rows of cells, already formatted.
+    pub rows: Vec<Vec<String>>,
+}
+
+/// A line plot of several series.
+pub(crate) struct Plot {
+    /// File name in the output directory.
+    pub file: String,
+    /// Caption above the plot.
+    pub title: String,
+    /// Axis labels.
+    pub x_label: &'static str,
+    /// Axis labels.
+    pub y_label: &'static str,
+    /// Logarithmic axes (points with a coordinate ≤ 0 are then left out).
+    pub log_x: bool,
+    /// Logarithmic axes.
+    pub log_y: bool,
+    /// The curves.
+    pub series: Vec<Series>,
+}
+
+/// One curve.
+pub(crate) struct Series {
+    /// Legend text.
+    pub label: String,
+    /// Points `(x, y)`.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Every figure, in output order. Append entries here to add figures.
+pub(crate) const FIGURES: &[Figure] = &[
+    Figure {
+        name: "fig09-10",
+        title: "Figs. 9–10: size and construction time against n (grid scene)",
+        run: fig_construction,
+    },
+    Figure {
+        name: "fig11",
+        title: "Fig. 11: frame rate along a trajectory against n (grid scene)",
+        run: fig_frame_rate,
+    },
+    Figure {
+        name: "fig12-13",
+        title: "Figs. 12–13: hall of mirrors, time per frame and scene complexity against ray-tree depth",
+        run: fig_hall,
+    },
+    Figure {
+        name: "fig14-15",
+        title: "Figs. 14–15: mixed scene (mirrors, screens, refraction) against n, depth 5",
+        run: fig_mixed,
+    },
+    Figure {
+        name: "fig16",
+        title: "Fig. 16: active set, cylinders touched per frame against n (grid scene)",
+        run: fig_active_set,
+    },
+    Figure {
+        name: "fig17-19",
+        title: "Figs. 17–19: screens on grid lines in kd-tree fashion, inserted first",
+        run: fig_screens,
+    },
+];
+
+/// The sizes of one run.
+pub(crate) struct Sizes {
+    /// `full`, `quick` or `tiny`.
+    pub label: &'static str,
+    /// Grid scene sizes (Figs. 9–11, 16).
+    pub grid_n: Vec<u32>,
+    /// Repetitions of a construction up to this n (median); a single run above it.
+    pub repeat_up_to: u32,
+    /// Repetitions of small constructions.
+    pub repeat: usize,
+    /// Frames along a trajectory.
+    pub frames: usize,
+    /// Passes along a trajectory (each frame's time is the median over passes).
+    pub passes: usize,
+    /// Pillars of the hall of mirrors.
+    pub hall_n: u32,
+    /// Deepest ray tree of Figs. 12–13.
+    pub hall_depth: usize,
+    /// Mixed scene sizes (Figs. 14–15).
+    pub mixed_n: Vec<u32>,
+    /// Ray-tree depth of Figs. 14–15.
+    pub mixed_depth: usize,
+    /// Frames along the trajectory of Figs. 14–15 (their frames cost the most).
+    pub mixed_frames: usize,
+    /// Cells per side of the grid of Figs. 17–19 (the paper: 12, 144 triangles).
+    pub screen_cells: i32,
+    /// Numbers of screens of Figs. 17–19.
+    pub screens: Vec<usize>,
+}
+
+impl Sizes {
+    fn new(quick: bool, tiny: bool) -> Sizes {
+        if tiny {
+            Sizes {
+                label: "tiny",
+                grid_n: vec![4, 16],
+                repeat_up_to: 16,
+                repeat: 1,
+                frames: 3,
+                passes: 1,
+                hall_n: 2,
+                hall_depth: 2,
+                mixed_n: vec![8, 16],
+                mixed_depth: 2,
+                mixed_frames: 3,
+                screen_cells: 4,
+                screens: vec![0, 1, 3],
+            }
+        } else if quick {
+            Sizes {
+                label: "quick",
+                grid_n: vec![16, 64, 256],
+                repeat_up_to: 256,
+                repeat: 3,
+                frames: 24,
+                passes: 3,
+                hall_n: 12,
+                hall_depth: 6,
+                mixed_n: vec![16, 64, 128],
+                mixed_depth: 5,
+                mixed_frames: 24,
+                screen_cells: 8,
+                screens: vec![0, 1, 3, 7, 15, 31, 63],
+            }
+        } else {
+            Sizes {
+                label: "full",
+                grid_n: vec![16, 64, 256, 1024, 4096],
+                repeat_up_to: 1024,
+                repeat: 3,
+                frames: 100,
+                passes: 3,
+                hall_n: 12,
+                hall_depth: 8,
+                mixed_n: vec![16, 64, 128, 256],
+                mixed_depth: 5,
+                mixed_frames: 40,
+                screen_cells: 12,
+                screens: vec![0, 1, 3, 7, 15, 31, 63, 143],
+            }
+        }
+    }
+
+    fn repeats(&self, n: u32) -> usize {
+        if n <= self.repeat_up_to {
+            self.repeat
+        } else {
+            1
+        }
+    }
+}
+
+/// Seed of every scene generator and insertion order.
+const SEED: u64 = 1;
+
+/// A plain-text progress bar on stderr: `\r[#####     ] 12/40 grid n=1024`.
+pub(crate) struct Progress {
+    prefix: String,
+    total: usize,
+    done: usize,
+}
+
+impl Progress {
+    fn new() -> Progress {
+        Progress {
+            prefix: String::new(),
+            total: 0,
+            done: 0,
+        }
+    }
+
+    /// Starts a figure of `total` steps.
+    pub fn start(&mut self, total: usize) {
+        self.total = total.max(1);
+        self.done = 0;
+        self.draw("");
+    }
+
+    /// One step done; `label` says what comes next.
+    pub fn step(&mut self, label: &str) {
+        self.done = (self.done + 1).min(self.total);
+        self.draw(label);
+    }
+
+    fn draw(&self, label: &str) {
+        const WIDTH: usize = 20;
+        let filled = WIDTH * self.done / self.total.max(1);
+        let bar: String = (0..WIDTH)
+            .map(|i| if i < filled { '#' } else { ' ' })
+            .collect();
+        let mut err = std::io::stderr().lock();
+        // Pad so a shorter label overwrites a longer one.
+        let _ = write!(
+            err,
+            "\r{} [{bar}] {}/{} {label:<40}",
+            self.prefix, self.done, self.total
+        );
+        let _ = err.flush();
+    }
+
+    fn finish(&self) {
+        let _ = writeln!(std::io::stderr());
+    }
+}
+
+/// Runs every figure and writes the output directory.
+pub fn run(a: &Args) -> Result<(), Failure> {
+    let tiny = std::env::var("VCX_FIGURES_TINY").is_ok_and(|v| v == "1");
+    let sizes = Sizes::new(a.quick, tiny);
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| Failure::bad_input(format!("cannot create {}: {e}", a.out.display())))?;
+    let started = Instant::now();
+    let date = utc_now();
+    // The 1, 5 and 15 minute load averages (other work on the machine skews the times).
+    let load_before = read_trimmed("/proc/loadavg")
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    let mut body = String::new();
+    let mut progress = Progress::new();
+    let mut plots = 0;
+    for (k, fig) in FIGURES.iter().enumerate() {
+        progress.prefix = format!("[{}/{}] {}", k + 1, FIGURES.len(), fig.name);
+        progress.start(1);
+        let t = Instant::now();
+        let out = (fig.run)(&sizes, &mut progress)?;
+        let secs = t.elapsed().as_secs_f64();
+        progress.finish();
+        let _ = writeln!(body, "### {}\n", fig.title);
+        let _ = writeln!(body, "{}\n", out.caption.trim());
+        body.push_str(&markdown_table(&out.table));
+        let _ = writeln!(body, "\n(measured in {secs:.1} s)\n");
+        for plot in &out.plots {
+            let svg = render_svg(plot).map_err(|e| internal(format!("{}: {e}", plot.file)))?;
+            write_file(&a.out.join(&plot.file), &svg)?;
+            plots += 1;
+            let _ = writeln!(body, "![{}]({})\n", plot.title, plot.file);
+        }
+    }
+    let total = started.elapsed().as_secs_f64();
+    let mut md = String::new();
+    let _ = writeln!(md, "# Figures (vcx bench figures)\n");
+    let _ = writeln!(
+        md,
+        "Generated by `{}` on {date} ({} sizes) in {total:.1} s.\n",
+        command_line(),
+        sizes.label
+    );
+    let _ = writeln!(md, "Machine: {}.\n", machine());
+    if let Some(l) = load_before {
+        let _ = writeln!(md, "Load average at the start (1, 5, 15 min): {l}.\n");
+    }
+    md.push_str(&body);
+    let path = a.out.join("BENCHMARKS.generated.md");
+    write_file(&path, &md)?;
+    write_stdout(&format!(
+        "wrote {} and {plots} plots in {total:.1} s\n",
+        path.display()
+    ))
+}
+
+fn write_file(path: &Path, text: &str) -> Result<(), Failure> {
+    std::fs::write(path, text)
+        .map_err(|e| Failure::bad_input(format!("cannot write {}: {e}", path.display())))
+}
+
+// ---------------------------------------------------------------------------------------
+// Measurements shared by the figures.
+
+/// Median of `v` (NaN for none).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// One construction: seconds (median over `repeat` runs) and the results of the last run.
+struct Built {
+    seconds: f64,
+    complex: Complex,
+    history: Option<vcx::partition::HistoryStats>,
+}
+
+fn build_ric(scene: &SceneRef<'_>, first: &[ObjectId], repeat: usize) -> Result<Built, Failure> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        let h = History::build(
+            scene,
+            &BuildOptions {
+                seed: SEED,
+                first: first.to_vec(),
+                ..Default::default()
+            },
+        )
+        .map_err(internal)?;
+        times.push(t.elapsed().as_secs_f64());
+        last = Some(h);
+    }
+    let h = last.ok_or_else(|| internal("no run"))?;
+    Ok(Built {
+        seconds: median(&mut times),
+        complex: h.complex(scene).map_err(internal)?,
+        history: Some(h.stats()),
+    })
+}
+
+fn build_sweep(scene: &SceneRef<'_>, repeat: usize) -> Result<Built, Failure> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        let c = build_by_sweep(scene).map_err(internal)?;
+        times.push(t.elapsed().as_secs_f64());
+        last = Some(c);
+    }
+    Ok(Built {
+        seconds: median(&mut times),
+        complex: last.ok_or_else(|| internal("no run"))?,
+        history: None,
+    })
+}
+
+/// Free viewpoints along the built-in circuit ([`vcx_demo::demo::trajectory::circuit`]: an ellipse around
+/// the middle of the scene, each point pushed along its radius to a free point with some
+/// room), with two changes so that every frame finds a viewpoint: the room is capped at
+/// half a unit (the circuit asks for 1 % of the scene's extent, more than the gaps between
+/// the cells of a large grid), and the point must be outside every object of the scene,
+/// screens included (ray trees need that).
+fn poses(world: &World, frames: usize) -> Vec<QueryPoint> {
+    let (x0, y0, x1, y1) = world.bbox;
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let (rx, ry) = (0.3 * (x1 - x0).max(1.0), 0.3 * (y1 - y0).max(1.0));
+    let room = (0.01 * world.extent()).min(0.5);
+    let free = |x: f64, y: f64| -> Option<QueryPoint> {
+        let q = QueryPoint::from_f64(x, y).ok()?;
+        (world.clearance(x, y) >= room && world.blocked_in_scene(q).is_none()).then_some(q)
+    };
+    let mut out = Vec::with_capacity(frames);
+    for k in 0..frames {
+        let phi = core::f64::consts::TAU * k as f64 / frames.max(1) as f64;
+        // Scales 1, 1.02, 0.98, 1.04, 0.96, … as the circuit.
+        let found = (0..40).find_map(|j| {
+            let step = f64::from((j + 1) / 2) * 0.02;
+            let s = if j % 2 == 1 { 1.0 + step } else { 1.0 - step };
+            free(cx + s * rx * phi.cos(), cy + s * ry * phi.sin())
+        });
+        out.extend(found);
+    }
+    out
+}
+
+/// Frames along a trajectory.
+struct Frames {
+    /// Frames measured (viewpoints whose walk succeeded).
+    frames: usize,
+    /// Viewpoints left out because the walk failed (a rounded virtual eye, …).
+    failed: usize,
+    /// Mean seconds per frame: each frame's median over the passes, averaged.
+    seconds: f64,
+    /// Mean intervals per frame (view or ray-tree leaves: the scene complexity).
+    intervals: f64,
+    /// Mean steps of the primary walk per frame (cylinders entered).
+    events: f64,
+    /// Mean distinct cylinders the primary walk entered per frame (the active set).
+    active: f64,
+}
+
+/// Which walk makes a frame.
+#[derive(Clone, Copy)]
+enum Walk {
+    /// `vcx::walk::view` (complex without screens).
+    View,
+    /// `vcx::walk::ray_tree` to this depth (complex with every object).
+    Tree(usize),
+}
+
+fn frames(
+    complex: &Complex,
+    scene: &SceneRef<'_>,
+    points: &[QueryPoint],
+    walk: Walk,
+    passes: usize,
+) -> Result<Frames, Failure> {
+    let run = |q: QueryPoint| -> Result<usize, vcx::walk::WalkError> {
+        Ok(match walk {
+            Walk::View => vcx::walk::view(complex, scene, q)?.len(),
+            Walk::Tree(d) => vcx::walk::ray_tree(complex, scene, q, d)?.len(),
+        })
+    };
+    // Drop the viewpoints whose walk fails, once, before timing.
+    let mut good = Vec::new();
+    let mut intervals = 0usize;
+    for &q in points {
+        if let Ok(k) = run(q) {
+            intervals += k;
+            good.push(q);
+        }
+    }
+    let mut times = vec![Vec::with_capacity(passes); good.len()];
+    for _ in 0..passes.max(1) {
+        for (q, t) in good.iter().zip(times.iter_mut()) {
+            let start = Instant::now();
+            let k = core::hint::black_box(run(*q));
+            let secs = start.elapsed().as_secs_f64();
+            k.map_err(internal)?;
+            t.push(secs);
+        }
+    }
+    let (mut events, mut active) = (0usize, 0usize);
+    for &q in &good {
+        let mut seen = Vec::new();
+        complex
+            .walk_trace(scene, q, |s| seen.push(s.cylinder))
+            .map_err(internal)?;
+        events += seen.len();
+        seen.sort_unstable_by_key(|c| c.index());
+        seen.dedup();
+        active += seen.len();
+    }
+    let k = good.len().max(1) as f64;
+    let total: f64 = times.iter_mut().map(|t| median(t)).sum();
+    Ok(Frames {
+        frames: good.len(),
+        failed: points.len() - good.len(),
+        seconds: if good.is_empty() { f64::NAN } else { total / k },
+        intervals: intervals as f64 / k,
+        events: events as f64 / k,
+        active: active as f64 / k,
+    })
+}
+
+fn world(kind: SceneKind, n: u32) -> Result<World, Failure> {
+    let file = generate(kind, n, SEED).map_err(|e| Failure::bad_input(e.to_string()))?;
+    World::new(file, format!("{} {n}", kind.name()), false).map_err(internal)
+}
+
+// ---------------------------------------------------------------------------------------
+// The figures.
+
+fn fig_construction(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(2 * s.grid_n.len());
+    let mut rows = Vec::new();
+    let (mut cyl, mut nodes, mut cbytes, mut hbytes) = (vec![], vec![], vec![], vec![]);
+    let (mut t_ric, mut t_sweep) = (vec![], vec![]);
+    for &n in &s.grid_n {
+        let file = generate(SceneKind::Grid, n, SEED).map_err(|e| internal(e.to_string()))?;
+        let scene = file.scene.as_ref();
+        p.step(&format!("grid n={n} ric"));
+        let ric = build_ric(&scene, &[], s.repeats(n))?;
+        p.step(&format!("grid n={n} sweep"));
+        let sweep = build_sweep(&scene, s.repeats(n))?;
+        let x = f64::from(n);
+        for (method, b) in [("ric", &ric), ("sweep", &sweep)] {
+            let c = &b.complex;
+            let h = b.history;
+            rows.push(vec![
+                n.to_string(),
+                method.to_string(),
+                s.repeats(n).to_string(),
+                format!("{:.4}", b.seconds),
+                thousands(c.cylinders().len()),
+                thousands(c.vertices().len()),
+                thousands(bytes(c)),
+                h.map_or("—".into(), |h| thousands(h.nodes)),
+                h.map_or("—".into(), |h| thousands(h.links)),
+                h.map_or("—".into(), |h| h.depth.to_string()),
+                h.map_or("—".into(), |h| thousands(history_bytes(&h))),
+            ]);
+        }
+        cyl.push((x, ric.complex.cylinders().len() as f64));
+        cbytes.push((x, bytes(&ric.complex) as f64));
+        if let Some(h) = ric.history {
+            nodes.push((x, h.nodes as f64));
+            hbytes.push((x, history_bytes(&h) as f64));
+        }
+        t_ric.push((x, ric.seconds));
+        t_sweep.push((x, sweep.seconds));
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen grid N --seed {SEED}`, insertion-order seed {SEED}. `ric`: randomized \
+             incremental construction with history (§4); `sweep`: rotational sweep of the same \
+             canonical partition, no history. Seconds: median of `runs` constructions. Bytes: \
+             cylinders + vertices of the complex; history: each node's cylinder record plus 4 \
+             bytes per link. Our history links every destroyed cylinder directly to its \
+             replacements, which is the paper's search path compaction (§4.4): there is no \
+             uncompacted variant to compare with."
+        ),
+        table: Table {
+            header: vec![
+                "n",
+                "<method",
+                "runs",
+                "seconds",
+                "cylinders",
+                "complex vertices",
+                "complex bytes",
+                "history nodes",
+                "links",
+                "depth",
+                "history bytes",
+            ],
+            rows,
+        },
+        plots: vec![
+            Plot {
+                file: "fig09_size.svg".into(),
+                title: "Fig. 9: size of the complex and of its history (grid scene)".into(),
+                x_label: "objects n",
+                y_label: "count / bytes",
+                log_x: true,
+                log_y: true,
+                series: vec![
+                    series("complex cylinders", cyl),
+                    series("complex bytes", cbytes),
+                    series("history nodes", nodes),
+                    series("history bytes", hbytes),
+                ],
+            },
+            Plot {
+                file: "fig10_build_time.svg".into(),
+                title: "Fig. 10: construction time (grid scene)".into(),
+                x_label: "objects n",
+                y_label: "seconds",
+                log_x: true,
+                log_y: true,
+                series: vec![
+                    series("randomized incremental (history)", t_ric),
+                    series("rotational sweep", t_sweep),
+                ],
+            },
+        ],
+    })
+}
+
+fn fig_frame_rate(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(s.grid_n.len());
+    let mut rows = Vec::new();
+    let mut fps = vec![];
+    for &n in &s.grid_n {
+        p.step(&format!("grid n={n}"));
+        let w = world(SceneKind::Grid, n)?;
+        let points = poses(&w, s.frames);
+        let sub = w.sub();
+        let f = frames(&w.complex, &sub.as_ref(), &points, Walk::View, s.passes)?;
+        let x = f64::from(n);
+        fps.push((x, 1.0 / f.seconds));
+        rows.push(vec![
+            n.to_string(),
+            thousands(w.complex.cylinders().len()),
+            f.frames.to_string(),
+            format!("{:.1}", f.seconds * 1e6),
+            format!("{:.0}", 1.0 / f.seconds),
+            format!("{:.1}", f.intervals),
+        ]);
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen grid N --seed {SEED}`, complex by the sweep. A frame is the exact \
+             full 360° view (`vcx::walk::view`) from a viewpoint of the built-in circuit (an \
+             ellipse around the middle of the scene): the core has no walk restricted to a \
+             field of view, so this is the cost of every 800-column frame of any heading from \
+             that viewpoint (turning intervals into columns is not timed). {} passes; each \
+             frame's time is its median over the passes; frames/s = frames ÷ summed times.",
+            s.passes
+        ),
+        table: Table {
+            header: vec![
+                "n",
+                "cylinders",
+                "frames",
+                "µs per frame",
+                "frames/s",
+                "intervals per frame",
+            ],
+            rows,
+        },
+        plots: vec![Plot {
+            file: "fig11_frame_rate.svg".into(),
+            title: "Fig. 11: frames per second along a trajectory (grid scene)".into(),
+            x_label: "objects n",
+            y_label: "frames per second",
+            log_x: true,
+            log_y: true,
+            series: vec![series("full 360° view", fps)],
+        }],
+    })
+}
+
+fn fig_hall(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(s.hall_depth + 2);
+    p.step(&format!("hall n={} build", s.hall_n));
+    let w = world(SceneKind::Hall, s.hall_n)?;
+    let full = w.full_complex().map_err(internal)?;
+    let scene = w.scene();
+    let points = poses(&w, s.frames);
+    let mut rows = Vec::new();
+    let (mut time, mut intervals, mut events) = (vec![], vec![], vec![]);
+    for depth in 0..=s.hall_depth {
+        p.step(&format!("hall depth={depth}"));
+        let f = frames(full, &scene, &points, Walk::Tree(depth), s.passes)?;
+        let x = depth as f64;
+        time.push((x, f.seconds * 1e6));
+        intervals.push((x, f.intervals));
+        events.push((x, f.events));
+        rows.push(vec![
+            depth.to_string(),
+            f.frames.to_string(),
+            f.failed.to_string(),
+            format!("{:.1}", f.seconds * 1e6),
+            format!("{:.0}", 1.0 / f.seconds),
+            format!("{:.1}", f.intervals),
+            format!("{:.1}", f.events),
+        ]);
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen hall {} --seed {SEED}` (four mirror walls, {} pillars), complex \
+             over every object by the sweep ({} cylinders). A frame is the full 360° ray tree \
+             (`vcx::walk::ray_tree`) to the given depth from a viewpoint of the built-in \
+             circuit; {} passes, each frame's median, averaged. Scene complexity: intervals \
+             of the ray tree per frame (directions where the branch changes); events: \
+             cylinders entered by the primary walk. Failed: viewpoints left out because a \
+             walk of their tree failed (a rounded virtual eye). The quadtree ray tracer is \
+             measured by `vcx bench error`.",
+            s.hall_n,
+            s.hall_n,
+            thousands(full.cylinders().len()),
+            s.passes
+        ),
+        table: Table {
+            header: vec![
+                "depth",
+                "frames",
+                "failed",
+                "µs per frame",
+                "frames/s",
+                "intervals per frame",
+                "events per frame",
+            ],
+            rows,
+        },
+        plots: vec![
+            Plot {
+                file: "fig12_hall_time.svg".into(),
+                title: "Fig. 12: hall of mirrors, time per frame against ray-tree depth".into(),
+                x_label: "ray-tree depth",
+                y_label: "µs per frame",
+                log_x: false,
+                log_y: false,
+                series: vec![series("visibility complex", time)],
+            },
+            Plot {
+                file: "fig13_hall_complexity.svg".into(),
+                title: "Fig. 13: hall of mirrors, scene complexity against ray-tree depth".into(),
+                x_label: "ray-tree depth",
+                y_label: "per frame",
+                log_x: false,
+                log_y: false,
+                series: vec![
+                    series("intervals (scene complexity)", intervals),
+                    series("primary walk events", events),
+                ],
+            },
+        ],
+    })
+}
+
+fn fig_mixed(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(s.mixed_n.len());
+    let mut rows = Vec::new();
+    let (mut fps, mut intervals) = (vec![], vec![]);
+    for &n in &s.mixed_n {
+        p.step(&format!("mixed n={n}"));
+        let w = world(SceneKind::Mixed, n)?;
+        let full = w.full_complex().map_err(internal)?;
+        let scene = w.scene();
+        let points = poses(&w, s.mixed_frames);
+        let f = frames(full, &scene, &points, Walk::Tree(s.mixed_depth), s.passes)?;
+        let x = f64::from(n);
+        fps.push((x, 1.0 / f.seconds));
+        intervals.push((x, f.intervals));
+        rows.push(vec![
+            n.to_string(),
+            w.screens().to_string(),
+            thousands(full.cylinders().len()),
+            f.frames.to_string(),
+            f.failed.to_string(),
+            format!("{:.1}", f.seconds * 1e6),
+            format!("{:.0}", 1.0 / f.seconds),
+            format!("{:.1}", f.intervals),
+            format!("{:.1}", f.events),
+        ]);
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen mixed N --seed {SEED}` (opaque blocks, mirror slabs, refractive \
+             discs, n/10 screens), complex over every object by the sweep. A frame is the full \
+             360° ray tree to depth {} from a viewpoint of the built-in circuit; {} passes, \
+             each frame's median, averaged. Columns as in Figs. 12–13.",
+            s.mixed_depth, s.passes
+        ),
+        table: Table {
+            header: vec![
+                "n",
+                "screens",
+                "cylinders",
+                "frames",
+                "failed",
+                "µs per frame",
+                "frames/s",
+                "intervals per frame",
+                "events per frame",
+            ],
+            rows,
+        },
+        plots: vec![
+            Plot {
+                file: "fig14_mixed_frame_rate.svg".into(),
+                title: format!(
+                    "Fig. 14: mixed scene, frames per second at depth {}",
+                    s.mixed_depth
+                ),
+                x_label: "objects n",
+                y_label: "frames per second",
+                log_x: true,
+                log_y: true,
+                series: vec![series("visibility complex", fps)],
+            },
+            Plot {
+                file: "fig15_mixed_complexity.svg".into(),
+                title: "Fig. 15: mixed scene, scene complexity (intervals per frame)".into(),
+                x_label: "objects n",
+                y_label: "intervals per frame",
+                log_x: true,
+                log_y: false,
+                series: vec![series("visibility complex", intervals)],
+            },
+        ],
+    })
+}
+
+fn fig_active_set(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(s.grid_n.len());
+    let mut rows = Vec::new();
+    let (mut steps, mut distinct, mut share) = (vec![], vec![], vec![]);
+    for &n in &s.grid_n {
+        p.step(&format!("grid n={n}"));
+        let w = world(SceneKind::Grid, n)?;
+        let points = poses(&w, s.frames);
+        let sub = w.sub();
+        // One pass: only the walk statistics are used, not the times.
+        let f = frames(&w.complex, &sub.as_ref(), &points, Walk::View, 1)?;
+        let cylinders = w.complex.cylinders().len();
+        let x = f64::from(n);
+        steps.push((x, f.events));
+        distinct.push((x, f.active));
+        share.push((x, 100.0 * f.active / cylinders.max(1) as f64));
+        rows.push(vec![
+            n.to_string(),
+            thousands(cylinders),
+            f.frames.to_string(),
+            format!("{:.1}", f.events),
+            format!("{:.1}", f.active),
+            format!("{:.3}", 100.0 * f.active / cylinders.max(1) as f64),
+        ]);
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen grid N --seed {SEED}`, complex by the sweep, viewpoints of the \
+             built-in circuit. Steps: calls of `Complex::walk_trace`'s step per frame (the \
+             cylinders entered by the full 360° walk, the start cylinder included); distinct: \
+             the active set, the distinct cylinders among them. The history is not walked \
+             (the view starts by locating θ = 0 among the cylinders)."
+        ),
+        table: Table {
+            header: vec![
+                "n",
+                "cylinders",
+                "frames",
+                "walk steps per frame",
+                "active set (distinct cylinders)",
+                "% of the complex",
+            ],
+            rows,
+        },
+        plots: vec![Plot {
+            file: "fig16_active_set.svg".into(),
+            title: "Fig. 16: cylinders touched per frame (grid scene)".into(),
+            x_label: "objects n",
+            y_label: "cylinders per frame",
+            log_x: true,
+            log_y: false,
+            series: vec![
+                series("walk steps", steps),
+                series("distinct cylinders (active set)", distinct),
+            ],
+        }],
+    })
+}
+
+/// Side of a grid cell of `vcx gen grid`, in scene units.
+const CELL: i32 = 10;
+/// Raw grid units (2⁻¹⁶) per 1/64 scene unit, the step of generated coordinates.
+const STEP_RAW: i32 = 1 << 10;
+
+/// Screens on the lines of a `cells × cells` grid of cells of side [`CELL`] from the
+/// origin (the layout of `vcx gen grid`), placed as the splits of a kd-tree in
+/// breadth-first order: the first cuts the whole grid across its longer side through the
+/// middle grid line, the next two cut each half, and so on while a region is wider than
+/// one cell; `count` splits at most. Each screen is a box 1/4 unit thick on its grid line,
+/// stopping 1/2 unit short of its region's ends, so screens never touch each other, and
+/// cell contents (1 unit inside their cells) stay clear.
+pub(crate) fn kd_screens(cells: i32, count: usize) -> Vec<Vec<Point>> {
+    let mut regions = std::collections::VecDeque::from([(0, 0, cells, cells)]);
+    let mut out = Vec::new();
+    let p = |x: i32, y: i32| Point::from_raw(x * STEP_RAW, y * STEP_RAW);
+    let (half, end, cell) = (8, 32, CELL * 64); // in 1/64 units
+                                                // Every split makes one more region and a region is popped once: at most cells² − 1
+                                                // splits and cells² single cells.
+    let bound = 2 * (cells.max(0) as usize).pow(2);
+    for _ in 0..bound {
+        if out.len() >= count {
+            break;
+        }
+        let Some((x0, y0, x1, y1)) = regions.pop_front() else {
+            break;
+        };
+        let (w, h) = (x1 - x0, y1 - y0);
+        if w < 2 && h < 2 {
+            continue;
+        }
+        let boxed = if w >= h {
+            let m = (x0 + x1) / 2;
+            regions.push_back((x0, y0, m, y1));
+            regions.push_back((m, y0, x1, y1));
+            let l = m * cell;
+            [
+                p(l - half, y0 * cell + end),
+                p(l + half, y0 * cell + end),
+                p(l + half, y1 * cell - end),
+                p(l - half, y1 * cell - end),
+            ]
+        } else {
+            let m = (y0 + y1) / 2;
+            regions.push_back((x0, y0, x1, m));
+            regions.push_back((x0, m, x1, y1));
+            let l = m * cell;
+            [
+                p(x0 * cell + end, l - half),
+                p(x1 * cell - end, l - half),
+                p(x1 * cell - end, l + half),
+                p(x0 * cell + end, l + half),
+            ]
+        };
+        if let [Some(a), Some(b), Some(c), Some(d)] = boxed {
+            out.push(vec![a, b, c, d]);
+        }
+    }
+    out
+}
+
+/// The grid scene of `cells²` triangles with `screens` kd-tree screens, screens first.
+fn screen_scene(cells: i32, screens: usize) -> Result<SceneFile, Failure> {
+    let n = (cells * cells) as u32;
+    let grid = generate(SceneKind::Grid, n, SEED).map_err(|e| internal(e.to_string()))?;
+    let scene = grid.scene.as_ref();
+    let mut objects: Vec<ObjectSpec> = kd_screens(cells, screens)
+        .into_iter()
+        .map(|vertices| ObjectSpec {
+            material: Material::Screen,
+            vertices,
+            extra: Default::default(),
+        })
+        .collect();
+    objects.extend(scene.objects().iter().map(|o| ObjectSpec {
+        material: o.material,
+        vertices: scene.polygon(o).to_vec(),
+        extra: Default::default(),
+    }));
+    SceneFile::new(objects, Default::default()).map_err(internal)
+}
+
+fn fig_screens(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(s.screens.len());
+    let n = s.screen_cells * s.screen_cells;
+    let mut rows = Vec::new();
+    let (mut cyl, mut nodes, mut time, mut fps) = (vec![], vec![], vec![], vec![]);
+    for &k in &s.screens {
+        p.step(&format!("{k} screens"));
+        let file = screen_scene(s.screen_cells, k)?;
+        let placed = file
+            .scene
+            .as_ref()
+            .objects()
+            .iter()
+            .filter(|o| o.material == Material::Screen)
+            .count();
+        let first: Vec<ObjectId> = (0..placed as u32).map(ObjectId).collect();
+        let w =
+            World::new(file, format!("grid {n} + {placed} screens"), false).map_err(internal)?;
+        let scene = w.scene();
+        let b = build_ric(&scene, &first, s.repeat)?;
+        let points = poses(&w, s.frames);
+        let f = frames(&b.complex, &scene, &points, Walk::Tree(0), s.passes)?;
+        let x = placed as f64;
+        cyl.push((x, b.complex.cylinders().len() as f64));
+        if let Some(h) = b.history {
+            nodes.push((x, h.nodes as f64));
+        }
+        time.push((x, b.seconds));
+        fps.push((x, 1.0 / f.seconds));
+        let h = b.history;
+        rows.push(vec![
+            placed.to_string(),
+            thousands(b.complex.cylinders().len()),
+            thousands(b.complex.vertices().len()),
+            thousands(bytes(&b.complex)),
+            h.map_or("—".into(), |h| thousands(h.nodes)),
+            h.map_or("—".into(), |h| thousands(history_bytes(&h))),
+            format!("{:.4}", b.seconds),
+            f.frames.to_string(),
+            format!("{:.1}", f.seconds * 1e6),
+            format!("{:.0}", 1.0 / f.seconds),
+            format!("{:.1}", f.intervals),
+        ]);
+    }
+    Ok(Output {
+        caption: format!(
+            "Scene `vcx gen grid {n} --seed {SEED}` ({c} × {c} triangles) plus screens (thin \
+             boxes 1/4 unit thick) on grid lines as the splits of a kd-tree in breadth-first \
+             order (`kd_screens` in `std-demo/src/cmd/figures.rs`). Construction: randomized \
+             incremental with the screens inserted first (`BuildOptions::first`), the \
+             triangles after in random order (seed {SEED}); seconds: median of {r} runs. \
+             Frame: the full 360° depth-0 ray tree (walking through the screens) from a \
+             viewpoint of the built-in circuit; {pa} passes, each frame's median, averaged.",
+            c = s.screen_cells,
+            r = s.repeat,
+            pa = s.passes
+        ),
+        table: Table {
+            header: vec![
+                "screens",
+                "cylinders",
+                "complex vertices",
+                "complex bytes",
+                "history nodes",
+                "history bytes",
+                "build seconds",
+                "frames",
+                "µs per frame",
+                "frames/s",
+                "intervals per frame",
+            ],
+            rows,
+        },
+        plots: vec![
+            Plot {
+                file: "fig17_screens_size.svg".into(),
+                title: "Fig. 17: size against the number of screens".into(),
+                x_label: "screens",
+                y_label: "count",
+                log_x: false,
+                log_y: false,
+                series: vec![
+                    series("complex cylinders", cyl),
+                    series("history nodes", nodes),
+                ],
+            },
+            Plot {
+                file: "fig18_screens_build_time.svg".into(),
+                title: "Fig. 18: construction time against the number of screens".into(),
+                x_label: "screens",
+                y_label: "seconds",
+                log_x: false,
+                log_y: false,
+                series: vec![series("randomized incremental, screens first", time)],
+            },
+            Plot {
+                file: "fig19_screens_frame_rate.svg".into(),
+                title: "Fig. 19: frame rate against the number of screens".into(),
+                x_label: "screens",
+                y_label: "frames per second",
+                log_x: false,
+                log_y: false,
+                series: vec![series("depth-0 ray tree", fps)],
+            },
+        ],
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Output: tables, plots, the machine.
+
+fn series(label: &str, points: Vec<(f64, f64)>) -> Series {
+    Series {
+        label: label.to_string(),
+        points,
+    }
+}
+
+/// `1234567` → `1,234,567`.
+fn thousands(v: usize) -> String {
+    let digits = v.to_string();
+    let mut out = String::new();
+    for (i, ch) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(ch);
+    }
+    out
+}
+
+fn markdown_table(t: &Table) -> String {
+    let mut s = String::from("|");
+    for h in &t.header {
+        let _ = write!(s, " {} |", h.trim_start_matches('<'));
+    }
+    s.push_str("\n|");
+    for h in &t.header {
+        s.push_str(if h.starts_with('<') { "---|" } else { "---:|" });
+    }
+    s.push('\n');
+    for row in &t.rows {
+        s.push('|');
+        for cell in row {
+            let _ = write!(s, " {cell} |");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The range of the finite values (positive ones on a log axis), widened a little.
+fn axis(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return if log { (1.0, 10.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        let pad = ((hi - lo) * 0.05).max(hi.abs() * 0.05).max(1e-9);
+        (
+            (lo - pad).min(if lo >= 0.0 { 0.0 } else { lo - pad }),
+            hi + pad,
+        )
+    }
+}
+
+/// A tick label: `16`, `2.5`, `0.004`, `2e6`.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a >= 1e6 {
+        format!("{v:.0e}")
+    } else if a >= 100.0 || v == v.round() {
+        format!("{v:.0}")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// The legend goes where the first curve is not: upper left if it rises, else upper right.
+fn legend_position(plot: &Plot) -> SeriesLabelPosition {
+    let first = plot
+        .series
+        .first()
+        .map(|s| s.points.as_slice())
+        .unwrap_or(&[]);
+    match (first.first(), first.last()) {
+        (Some(a), Some(b)) if b.1 < a.1 => SeriesLabelPosition::UpperRight,
+        _ => SeriesLabelPosition::UpperLeft,
+    }
+}
+
+fn render_svg(plot: &Plot) -> Result<String, String> {
+    let xs = axis(
+        plot.series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0)),
+        plot.log_x,
+    );
+    let ys = axis(
+        plot.series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1)),
+        plot.log_y,
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 460)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (x, y) = (xs.0..xs.1, ys.0..ys.1);
+        match (plot.log_x, plot.log_y) {
+            (true, true) => draw(&root, plot, x.log_scale(), y.log_scale()),
+            (true, false) => draw(&root, plot, x.log_scale(), y),
+            (false, true) => draw(&root, plot, x, y.log_scale()),
+            (false, false) => draw(&root, plot, x, y),
+        }?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+fn draw<X, Y>(
+    root: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    plot: &Plot,
+    x: X,
+    y: Y,
+) -> Result<(), String>
+where
+    X: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    Y: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    X::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+    Y::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let mut chart = ChartBuilder::on(root)
+        .caption(&plot.title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x, y)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(plot.x_label)
+        .y_desc(plot.y_label)
+        .x_label_formatter(&|v| short(*v))
+        .y_label_formatter(&|v| short(*v))
+        .draw()
+        .map_err(e)?;
+    for (i, s) in plot.series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|&(x, y)| {
+                x.is_finite()
+                    && y.is_finite()
+                    && (!plot.log_x || x > 0.0)
+                    && (!plot.log_y || y > 0.0)
+            })
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+            .map_err(e)?
+            .label(s.label.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(PointSeries::of_element(
+                pts.iter().copied(),
+                4,
+                color.filled(),
+                &|c, s, st| Circle::new(c, s, st),
+            ))
+            .map_err(e)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(legend_position(plot))
+        .draw()
+        .map_err(e)?;
+    Ok(())
+}
+
+fn read_trimmed(path: &str) -> Option<String> {
+    std::fs::read_to_string(path)
+        .ok()
+        .map(|s| s.trim().to_string())
+}
+
+/// CPU model, logical cores, memory and the compiler, from /proc and `rustc --version`.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let model = cpu
+        .lines()
+        .find(|l| l.starts_with("model name"))
+        .and_then(|l| l.split(':').nth(1))
+        .map_or("unknown CPU".to_string(), |m| m.trim().to_string());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mem = std::fs::read_to_string("/proc/meminfo")
+        .unwrap_or_default()
+        .lines()
+        .find(|l| l.starts_with("MemTotal:"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|kb| kb.parse::<f64>().ok())
+        .map_or("unknown memory".to_string(), |kb| {
+            format!("{:.1} GiB", kb / 1024.0 / 1024.0)
+        });
+    let rustc = std::process::Command::new("rustc")
+        .arg("--version")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "rustc not found".to_string());
+    let profile = if cfg!(debug_assertions) {
+        "debug build"
+    } else {
+        "release build"
+    };
+    format!("{model}, {cores} logical cores, {mem} memory; {rustc}; {profile}")
+}
+
+fn command_line() -> String {
+    let args: Vec<String> = std::env::args().collect();
+    let mut s = String::from("vcx");
+    for a in args.iter().skip(1) {
+        s.push(' ');
+        s.push_str(a);
+    }
+    if std::env::var("VCX_FIGURES_TINY").is_ok_and(|v| v == "1") {
+        s = format!("VCX_FIGURES_TINY=1 {s}");
+    }
+    s
+}
+
+/// The current UTC date and time, `YYYY-MM-DD HH:MM UTC` (civil from days, proleptic
+/// Gregorian calendar).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
+        rem / 3600,
+        (rem % 3600) / 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kd_screens_are_valid_and_disjoint_with_the_grid() {
+        for cells in [1, 2, 3, 4, 5, 12] {
+            let all = kd_screens(cells, usize::MAX);
+            // A full kd-tree down to single cells: one split per extra region.
+            assert_eq!(all.len(), (cells * cells - 1) as usize, "cells={cells}");
+            let file = screen_scene(cells, usize::MAX).expect("valid scene");
+            assert_eq!(
+                file.scene.as_ref().len(),
+                all.len() + (cells * cells) as usize
+            );
+        }
+        assert_eq!(kd_screens(12, 7).len(), 7);
+    }
+
+    #[test]
+    fn thousands_and_dates() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1000), "1,000");
+        assert_eq!(thousands(1_234_567), "1,234,567");
+        assert!(utc_now().ends_with(" UTC"));
+    }
+}

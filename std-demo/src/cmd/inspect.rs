@@ -1,0 +1,157 @@
+//! `vcx inspect FILE.vcx [--json]`: the header of a binary complex file and the size of
+//! each part in bytes (layout: `docs/format.md`).
+//!
+//! The whole file is decoded and validated first, as every command that loads it would: a
+//! corrupt file is one `error:` line naming the byte offset, part, element and field at
+//! fault, exit status 2.
+//!
+//! Text output, one line per part:
+//!
+//! ```text
+//! FILE: vcx complex format version 1, 3,214 bytes, seed 0, history compacted: no
+//!   header      56 bytes
+//!   scene      402 bytes  64 objects, 192 vertices
+//!   complex  2,752 bytes  450 vertices (225 free bitangents), 1,543 cylinders (1.78 bytes per cylinder)
+//!   history  absent
+//!   checksum     4 bytes  CRC-32 0x1a2b3c4d
+//! ```
+//!
+//! With a history (`vcx build --history always`) its line reads `history  B bytes  N nodes,
+//! L links, depth D (b bytes per node)`, the depth being the longest root-to-leaf path of
+//! the decoded DAG (`History::stats`).
+//!
+//! With `--json` one object: `file`, `version`, `bytes`, `seed` (or null), `compacted`,
+//! `parts` — `header`, `scene`, `complex`, `history` (null when absent; else `bytes`,
+//! `nodes`, `links`, `depth`), `checksum` — each with its `bytes` and its counts, and
+//! `checksum_value` as a hex string.
+
+use std::path::PathBuf;
+
+use serde_json::{json, Value};
+use vcx::format::{Header, Part, CHECKSUM_LEN, HEADER_LEN};
+
+use super::{write_stdout, Failure};
+
+/// Arguments of `vcx inspect`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The binary complex file (written by `vcx build SCENE.json -o FILE.vcx`).
+    pub file: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `1234567` as `1,234,567`.
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// Reads, validates and describes the file.
+pub fn run(args: &Args) -> Result<(), Failure> {
+    let path = &args.file;
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::bad_input(format!("cannot read {}: {e}", path.display())))?;
+    let fail = |e: vcx::format::FormatError| crate::input::vcx_error(path, &e);
+    let header = Header::read(&bytes).map_err(fail)?;
+    let loaded = crate::input::decode_file(&bytes).map_err(fail)?;
+    let depth = loaded.history.as_ref().map(|h| h.stats().depth);
+    let crc = bytes
+        .get(bytes.len().saturating_sub(CHECKSUM_LEN)..)
+        .and_then(|t| <[u8; 4]>::try_from(t).ok())
+        .map_or(0, u32::from_le_bytes);
+    let h = &header;
+    let text = if args.json {
+        let v = json!({
+            "file": path.display().to_string(),
+            "version": h.version,
+            "bytes": bytes.len(),
+            "seed": h.seed,
+            "compacted": h.compacted,
+            "parts": {
+                "header": {"bytes": HEADER_LEN},
+                "scene": {
+                    "bytes": h.scene_bytes,
+                    "objects": h.objects,
+                    "vertices": h.scene_vertices,
+                },
+                "complex": {
+                    "bytes": h.complex_bytes,
+                    "vertices": h.complex_vertices,
+                    "cylinders": h.cylinders,
+                },
+                "history": if h.has_history() {
+                    json!({
+                        "bytes": h.history_bytes,
+                        "nodes": h.history_nodes,
+                        "links": h.history_links,
+                        "depth": depth,
+                    })
+                } else {
+                    Value::Null
+                },
+                "checksum": {"bytes": CHECKSUM_LEN},
+            },
+            "checksum_value": format!("{crc:#010x}"),
+        });
+        format!("{v}\n")
+    } else {
+        let per_cylinder = if h.cylinders > 0 {
+            f64::from(h.complex_bytes) / f64::from(h.cylinders)
+        } else {
+            0.0
+        };
+        let range = |p: Part| {
+            let r = h.part_range(p);
+            grouped((r.end - r.start) as u64)
+        };
+        let mut t = format!(
+            "{}: vcx complex format version {}, {} bytes, seed {}, history compacted: {}\n",
+            path.display(),
+            h.version,
+            grouped(bytes.len() as u64),
+            h.seed.map_or("not recorded".to_string(), |s| s.to_string()),
+            if h.compacted { "yes" } else { "no" },
+        );
+        t.push_str(&format!("  header   {:>9} bytes\n", range(Part::Header)));
+        t.push_str(&format!(
+            "  scene    {:>9} bytes  {} objects, {} vertices\n",
+            range(Part::Scene),
+            grouped(h.objects.into()),
+            grouped(h.scene_vertices.into()),
+        ));
+        t.push_str(&format!(
+            "  complex  {:>9} bytes  {} vertices ({} free bitangents), {} cylinders ({per_cylinder:.2} bytes per cylinder)\n",
+            range(Part::Complex),
+            grouped(h.complex_vertices.into()),
+            grouped((h.complex_vertices / 2).into()),
+            grouped(h.cylinders.into()),
+        ));
+        if h.has_history() {
+            let per_node = f64::from(h.history_bytes) / f64::from(h.history_nodes.max(1));
+            t.push_str(&format!(
+                "  history  {:>9} bytes  {} nodes, {} links, depth {} ({per_node:.2} bytes per node)\n",
+                range(Part::History),
+                grouped(h.history_nodes.into()),
+                grouped(h.history_links.into()),
+                depth.unwrap_or(0),
+            ));
+        } else {
+            t.push_str("  history  absent\n");
+        }
+        t.push_str(&format!(
+            "  checksum {:>9} bytes  CRC-32 {crc:#010x}\n",
+            CHECKSUM_LEN
+        ));
+        t
+    };
+    write_stdout(&text)
+}
