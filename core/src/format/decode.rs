@@ -8,9 +8,9 @@ use serde::de::DeserializeOwned;
 use super::encode::{MIRROR, OPAQUE, REFRACTIVE, SCREEN};
 use super::{Arena, CountProblem, FormatError, Header, Part, Problem};
 use crate::geom::point::MAX_ABS_RAW;
-use crate::geom::sos::{self, Angle};
-use crate::geom::{Point, Sign};
-use crate::line_space::{ranked, Bitangent, Bound, Chain};
+use crate::geom::sos::Angle;
+use crate::geom::Point;
+use crate::line_space::{tangency, Bitangent, Bound, Chain};
 use crate::partition::{Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::scene::{Eta, FixedScene, Material, ObjectId, SceneRef};
 
@@ -319,26 +319,6 @@ fn object_of(scene: &SceneRef<'_>, v: usize) -> Option<ObjectId> {
     let i = objects.partition_point(|o| o.first_vertex() + o.len() <= v);
     let o = objects.get(i)?;
     (o.first_vertex() <= v).then_some(ObjectId(i as u32))
-}
-
-/// The chain of `object` on which the oriented line `a → b` is tangent at its vertex `a`
-/// (`Lower`: both neighbours of `a` on the left), or `None` if it is not tangent there —
-/// the tangency test of `line_space::bitangent`, on perturbed orientations.
-fn tangency(scene: &SceneRef<'_>, object: ObjectId, a: usize, b: usize) -> Option<Bound> {
-    let obj = scene.object(object)?;
-    let (first, n) = (obj.first_vertex(), obj.len());
-    let k = a.checked_sub(first)?;
-    let prev = first + (k + n - 1) % n;
-    let next = first + (k + 1) % n;
-    let (ra, rb) = (ranked(scene, a), ranked(scene, b));
-    match (
-        sos::orient(ra, rb, ranked(scene, prev)),
-        sos::orient(ra, rb, ranked(scene, next)),
-    ) {
-        (Sign::Positive, Sign::Positive) => Some(Bound::Lower),
-        (Sign::Negative, Sign::Negative) => Some(Bound::Upper),
-        _ => None,
-    }
 }
 
 fn flip(b: Bound) -> Bound {

@@ -32,8 +32,14 @@ impl Bitangent {
 }
 
 /// The side of the oriented line `a → b` on which the object of vertex `a` lies, if the
-/// line is tangent to it at `a`: `Lower` if the object is on the left.
-fn tangency(scene: &SceneRef<'_>, object: ObjectId, a: usize, b: usize) -> Option<Bound> {
+/// line is tangent to it at `a`: `Lower` if the object is on the left (perturbed
+/// orientations; also the check of a loaded file's vertices).
+pub(crate) fn tangency(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    a: usize,
+    b: usize,
+) -> Option<Bound> {
     let obj = scene.object(object)?;
     let (first, n) = (obj.first_vertex(), obj.len());
     let k = a.checked_sub(first)?;

@@ -20,6 +20,8 @@ mod cross_section;
 #[cfg(feature = "alloc")]
 mod visibility;
 
+#[cfg(feature = "format")]
+pub(crate) use bitangent::tangency;
 pub use bitangent::{bitangents, is_free, Bitangent};
 #[cfg(feature = "alloc")]
 pub use cross_section::{cross_section, Interval};
