@@ -35,7 +35,7 @@ pub enum Layer {
 }
 
 impl Layer {
-    fn of(c: &Cylinder, chain: Chain) -> Layer {
+    pub(super) fn of(c: &Cylinder, chain: Chain) -> Layer {
         if c.ceiling == Some(chain.object) {
             Layer::Before
         } else if c.floor == Some(chain.object) {
@@ -173,8 +173,9 @@ impl core::fmt::Display for BufferTooSmall {
 
 impl core::error::Error for BufferTooSmall {}
 
-/// Index of a (chain, side, layer) tiling: 12 slots per object.
-fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
+/// Index of a (chain, side, layer) tiling (and of the randomized construction's border
+/// index): 12 slots per object.
+pub(super) fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
     let bound = match chain.bound {
         crate::line_space::Bound::Lower => 0,
         crate::line_space::Bound::Upper => 1,

@@ -63,7 +63,7 @@ use alloc::vec::Vec;
 use core::cmp::Ordering;
 use core::mem::size_of;
 
-use super::borders::{Layer, Side};
+use super::borders::{slot, Layer, Side};
 use super::{Complex, ComplexError, Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::{Angle, RankedPoint};
@@ -374,40 +374,12 @@ impl Default for History {
     }
 }
 
-/// The border-index slot of a (chain, side, layer).
-fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
-    let bound = match chain.bound {
-        Bound::Lower => 0,
-        Bound::Upper => 1,
-    };
-    let side = match side {
-        Side::Below => 0,
-        Side::Above => 1,
-    };
-    let layer = match layer {
-        Layer::Around => 0,
-        Layer::Before => 1,
-        Layer::After => 2,
-    };
-    ((chain.object.0 as usize * 2 + bound) * 2 + side) * 3 + layer
-}
-
-fn layer_of(c: &Cylinder, chain: Chain) -> Layer {
-    if c.ceiling == Some(chain.object) {
-        Layer::Before
-    } else if c.floor == Some(chain.object) {
-        Layer::After
-    } else {
-        Layer::Around
-    }
-}
-
 /// The border-index entries of a cylinder: its top arc seen from below, its bottom arc
 /// seen from above.
 fn border_slots(c: &Cylinder) -> [Option<usize>; 2] {
     [
-        c.top.map(|t| slot(t, Side::Below, layer_of(c, t))),
-        c.bottom.map(|b| slot(b, Side::Above, layer_of(c, b))),
+        c.top.map(|t| slot(t, Side::Below, Layer::of(c, t))),
+        c.bottom.map(|b| slot(b, Side::Above, Layer::of(c, b))),
     ]
 }
 
