@@ -1,48 +1,10 @@
 //! The randomized incremental construction against the canonical partition of the
 //! rotational sweep, after every insertion, for several seeds.
 
-use vcx::partition::{build_by_sweep, Complex, History, Wall};
+use vcx::partition::{build_by_sweep, History};
 use vcx::{Material, ObjectId, Point, Scene, SceneRef, SubScene};
 use vcx_demo::generate::{generate, SceneKind};
-
-type Cyl = (
-    Option<u32>,
-    Option<u32>,
-    Option<(u32, u8)>,
-    Option<(u32, u8)>,
-    Option<(usize, usize)>,
-    Option<(usize, usize)>,
-);
-/// A cylinder and its left and right neighbours.
-type Desc = (Cyl, Option<Cyl>, Option<Cyl>);
-
-/// The canonical description of a complex: cylinders by floor, ceiling, arcs and walls,
-/// with object ids mapped through `id`.
-fn describe(c: &Complex, id: impl Fn(ObjectId) -> u32) -> Vec<Desc> {
-    let wall = |w: Wall| match w {
-        Wall::Zero => None,
-        Wall::Vertex(v) => c.vertex(v).map(|v| (v.bitangent.first, v.bitangent.second)),
-    };
-    let chain = |ch: Option<vcx::line_space::Chain>| ch.map(|ch| (id(ch.object), ch.bound as u8));
-    let one = |cy: &vcx::partition::Cylinder| -> Cyl {
-        (
-            cy.floor.map(&id),
-            cy.ceiling.map(&id),
-            chain(cy.bottom),
-            chain(cy.top),
-            wall(cy.left),
-            wall(cy.right),
-        )
-    };
-    let nb = |n: Option<vcx::partition::CylinderId>| n.and_then(|n| c.cylinder(n)).map(one);
-    let mut out: Vec<Desc> = c
-        .cylinders()
-        .iter()
-        .map(|cy| (one(cy), nb(cy.left_neighbour), nb(cy.right_neighbour)))
-        .collect();
-    out.sort();
-    out
-}
+use vcx_tests::generators::describe;
 
 fn check_every_prefix(name: &str, scene: &SceneRef<'_>, seed: u64) {
     let mut order: Vec<ObjectId> = (0..scene.len() as u32).map(ObjectId).collect();
