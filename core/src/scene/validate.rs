@@ -190,10 +190,14 @@ pub(super) fn polygon(
     let twice_area: i128 = edges(pts)
         .map(|(a, b)| i128::from(orient_det(first, a, b)))
         .sum();
-    let turn = if twice_area < 0 {
-        Sign::Negative
-    } else {
-        Sign::Positive
+    // A curve whose corners all turn one way is not "not convex" even if its loops give
+    // the other area sign (a self-intersecting star): the winding count below names it.
+    let first_turn = corners(pts).next().map(|(p, v, q)| orient(p, v, q));
+    let uniform = corners(pts).all(|(p, v, q)| Some(orient(p, v, q)) == first_turn);
+    let turn = match first_turn {
+        Some(t) if uniform => t,
+        _ if twice_area < 0 => Sign::Negative,
+        _ => Sign::Positive,
     };
     for (vertex, (p, v, q)) in corners(pts).enumerate() {
         let s = orient(p, v, q);
