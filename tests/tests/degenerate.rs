@@ -6,8 +6,7 @@
 //!   bitangents against the reference (`build_complex`);
 //! * point location against exact ray shooting (`locate`);
 //! * walked views and depth-0 ray trees against the reference (`walk`);
-//! * ray trees at depth 1–2 against the reference (`ray_tree`; ignored while its bugs are
-//!   open);
+//! * ray trees at depth 1–2 against the reference (`ray_tree`);
 //! * the randomized incremental construction against the sweep after every insertion, with
 //!   memory budgets and rollback (`ric`).
 //!
@@ -86,11 +85,7 @@ proptest! {
 proptest! {
     #![proptest_config(config(300))]
 
-    /// Ignored while `boundary_vertex_mirror_corner.rs` and `thin_interval_below_2pi.rs`
-    /// (fuzz/regressions/ray_tree/) are open: with `PROPTEST_CASES=2000` the last two runs
-    /// each found one of them within 80 s; run with `-- --ignored`.
     #[test]
-    #[ignore = "bug: ray_tree boundary vertex at a mirror corner (fuzz/regressions/ray_tree/boundary_vertex_mirror_corner.rs)"]
     fn ray_trees_match_the_reference(b in bytes()) {
         if let Some(input) = decode::<RayTreeInput>(&b) {
             check_ray_tree(&input).map(drop).map_err(|e| fail("ray_tree", &input, &b, &e))?;

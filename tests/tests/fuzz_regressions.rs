@@ -213,7 +213,6 @@ fn ray_tree_no_start_far_eye_depth2() {
 }
 
 #[test]
-#[ignore = "bug: ray_tree (depth 1) boundary vertex taken from the primary stage (mirror corner) where the reference takes the reflected stage's"]
 fn ray_tree_boundary_vertex_mirror_corner() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/boundary_vertex_mirror_corner.rs");
@@ -221,7 +220,6 @@ fn ray_tree_boundary_vertex_mirror_corner() {
 }
 
 #[test]
-#[ignore = "bug: ray_tree (depth 1) drops a thin interval of an opaque object just below 2π"]
 fn ray_tree_thin_interval_below_2pi() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/thin_interval_below_2pi.rs");

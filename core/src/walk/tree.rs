@@ -25,6 +25,7 @@ use core::cmp::Ordering;
 use super::{optics, Anchor, Position, WalkError};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
+use crate::geom::wide::Wide;
 use crate::geom::{Point, QueryPoint, Sign};
 use crate::line_space::{ranked, Bound, Chain};
 use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Wall};
@@ -59,12 +60,11 @@ struct Dir {
 /// How the vertex of a boundary is found once the branches on both sides are known (the
 /// reference's rule): among the stages of the ray at the boundary (the primary stage, then
 /// one per hop), the first one whose ray, beyond its origin, holds a vertex of the object
-/// that stage hits on either side; the vertex nearest to that stage's eye. The stage where
-/// the boundary arises is tested exactly; earlier stages (a coincidence, frequent only in
-/// grid-aligned scenes) are tested in `f64` with a relative tolerance of 1e-12 (the map
-/// back is accurate to a few ulps unless a hop grazes its edge; 1e-10 took a vertex
-/// 7·10⁻¹¹ off the ray of touching objects, `boundary_vertex_touching.rs`) — an exact test
-/// needs 256-bit products (later work).
+/// that stage hits on either side; the vertex nearest to that stage's eye. Every stage is
+/// tested exactly, earlier ones on the boundary direction mapped back through the hops in
+/// 1024-bit integers ([`Tree::map_dir_exact`], up to 9 hops); beyond that in `f64` with a
+/// relative tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
+/// `boundary_vertex_mirror_corner.rs`).
 #[derive(Clone, Debug)]
 struct Rule {
     /// The hops up to the stage where the boundary arises.
@@ -393,6 +393,33 @@ impl Tree<'_, '_> {
         })
     }
 
+    /// The range `(lo, hi)` (exact, less than π wide: it lies on one edge) seen through
+    /// `hop`, reversed if `flip` (mirrors). Mapped ends are placed to `f64` precision, so a
+    /// range thinner than that can come out with both ends on one direction or crossed:
+    /// it is then collapsed onto one direction, the end that points at a vertex if only
+    /// one does (`split` and `floor_pieces` take a collapsed range as the ray just before
+    /// that direction).
+    fn map_range(
+        &self,
+        lo: &Dir,
+        hi: &Dir,
+        hop: &Hop,
+        flip: bool,
+    ) -> Result<(Dir, Dir), WalkError> {
+        let (a, b) = (self.map_end(lo, hop)?, self.map_end(hi, hop)?);
+        let (a, b) = if flip { (b, a) } else { (a, b) };
+        let thin = cross(lo.angle.vector(), hi.angle.vector()) == 0;
+        if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
+            let keep = if a.vertex.is_some() && b.vertex.is_none() {
+                a
+            } else {
+                b
+            };
+            return Ok((keep, keep));
+        }
+        Ok((a, b))
+    }
+
     /// Side of the line through `v` against the line through `eye`, both of direction `d`
     /// turned counter-clockwise by an infinitesimal δ (larger than the symbolic
     /// perturbation): `Positive` if `v`'s line lies left (above). A vertex exactly on the
@@ -568,21 +595,23 @@ impl Tree<'_, '_> {
         to: &Dir,
         first: Boundary,
     ) -> Result<Vec<Piece>, WalkError> {
-        let (start, theta) = match self.locate_floor(eye, m, from) {
-            // Both ends placed on one direction: the range is thinner than `f64` resolves
-            // and may lie on either side of it. One piece, seen as just before its end
-            // (the end, exact where it points at a vertex, is the better placed one).
-            Err(WalkError::NoStart) if from.angle.cmp_exact(&to.angle) == Ordering::Equal => {
-                let id = self.scan_floor(eye, m, &to.angle, false)?;
-                return Ok(alloc::vec![Piece {
-                    from: *from,
-                    to: *to,
-                    ceiling: self.complex.ceiling(id),
-                    boundary: first,
-                }]);
-            }
-            r => r?,
-        };
+        if from.angle.cmp_exact(&to.angle) == Ordering::Equal {
+            // Both ends placed on one direction (`map_range`): the range is thinner than
+            // `f64` resolves and lies on one side of it, the side where the line meets
+            // `m`'s sheet — just before the direction, else just after it. One piece;
+            // never a walk around the full circle.
+            let id = match self.scan_floor(eye, m, &to.angle, false) {
+                Err(WalkError::NoStart) => self.locate_floor(eye, m, from)?.0,
+                r => r?,
+            };
+            return Ok(alloc::vec![Piece {
+                from: *from,
+                to: *to,
+                ceiling: self.complex.ceiling(id),
+                boundary: first,
+            }]);
+        }
+        let (start, theta) = self.locate_floor(eye, m, from)?;
         let lap = if to.angle.cmp_angle(&theta) == Ordering::Greater {
             0
         } else {
@@ -672,6 +701,11 @@ impl Tree<'_, '_> {
         };
         let (f, n) = (obj.first_vertex(), obj.len());
         let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
+        // Both ends on one direction (see `map_range`): the one edge the ray just before
+        // `hi` crosses, else the one just after it, as `floor_pieces` takes such a range.
+        if cross(lv, hv) == 0 {
+            return self.split_collapsed(eye, m, lo, hi, first, front);
+        }
         let mut out = Vec::new();
         for k in 0..n {
             let (ia, ib) = (f + k, f + (k + 1) % n);
@@ -702,6 +736,39 @@ impl Tree<'_, '_> {
             0.cmp(&c)
         });
         out
+    }
+
+    /// [`Tree::split`] of a range collapsed onto one direction `hi`: the edge crossed just
+    /// before it, else just after it (at most one piece).
+    fn split_collapsed(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        lo: &Dir,
+        hi: &Dir,
+        first: Boundary,
+        front: bool,
+    ) -> Vec<(Dir, Dir, Boundary, (usize, usize))> {
+        let Some(obj) = self.scene.object(m) else {
+            return Vec::new();
+        };
+        let (f, n) = (obj.first_vertex(), obj.len());
+        let h = hi.angle.vector();
+        let edges = (0..n).filter_map(|k| {
+            let (ia, ib) = (f + k, f + (k + 1) % n);
+            let (s0, s1) = match (front, side(self.qpoint(ia), self.qpoint(ib), eye)) {
+                (true, Sign::Negative) => (ib, ia),
+                (false, Sign::Positive) => (ia, ib),
+                _ => return None,
+            };
+            let (v0, v1) = (diff(self.qpoint(s0), eye), diff(self.qpoint(s1), eye));
+            Some(((ia, ib), cross(v0, h), cross(h, v1)))
+        });
+        let before = edges.clone().find(|&(_, c0, c1)| c0 > 0 && c1 >= 0);
+        let edge = before.or_else(|| edges.clone().find(|&(_, c0, c1)| c0 >= 0 && c1 > 0));
+        edge.map(|(e, _, _)| (*lo, *hi, first, e))
+            .into_iter()
+            .collect()
     }
 
     fn piece(
@@ -793,7 +860,7 @@ impl Tree<'_, '_> {
                 level: level + 1,
             };
             // Mirrors flip orientation: counter-clockwise from the image of `hi`.
-            let (from, to) = (self.map_end(&hi, &hop)?, self.map_end(&lo, &hop)?);
+            let (from, to) = self.map_range(&lo, &hi, &hop, true)?;
             self.hops.push(hop);
             let mut tmp = Vec::new();
             let r = self.deeper(e, m, &from, &to, boundary.clone(), depth, &mut tmp);
@@ -843,7 +910,7 @@ impl Tree<'_, '_> {
                 // The inside stage hits the refractive object itself.
                 level,
             };
-            let (from1, to1) = (self.map_end(&lo, &hop)?, self.map_end(&hi, &hop)?);
+            let (from1, to1) = self.map_range(&lo, &hi, &hop, false)?;
             self.hops.push(hop);
             let r = self.exits(e1, m, eta, &from1, &to1, boundary, depth, level, out);
             self.hops.pop();
@@ -880,7 +947,7 @@ impl Tree<'_, '_> {
                 next: e2,
                 level: level + 1,
             };
-            let (from, to) = (self.map_end(&lo, &hop)?, self.map_end(&hi, &hop)?);
+            let (from, to) = self.map_range(&lo, &hi, &hop, false)?;
             self.hops.push(hop);
             let r = self.deeper(e2, m, &from, &to, b2, depth, out);
             self.hops.pop();
@@ -927,46 +994,103 @@ impl Tree<'_, '_> {
                 Some(h) => (h.next, h.level, Some((h.a, h.b))),
             };
             let level = if st == stages { rule.level } else { level };
-            let exact = st == stages;
-            let d = self.map_dir(rule.hops.get(st..).unwrap_or(&[]), rule.eye, rule.dir);
             let owners = [left.get(level), right.get(level)];
-            let mut best: Option<(f64, usize)> = None;
-            for (k, id) in owners.iter().enumerate() {
-                let Some(id) = id else { continue };
-                if k == 1 && owners[0] == Some(id) {
-                    continue;
-                }
-                let Some(obj) = self.scene.object(**id) else {
-                    continue;
-                };
-                for v in obj.first_vertex()..obj.first_vertex() + obj.len() {
+            // The vertices of the objects this stage hits on either side, beyond the
+            // stage's origin edge (a ray leaving a mirror or refractive edge).
+            let candidates = owners
+                .iter()
+                .enumerate()
+                .filter(|&(k, id)| id.is_some() && !(k == 1 && owners[0] == *id))
+                .filter_map(|(_, id)| self.scene.object(*(*id)?))
+                .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
+                .filter(|&v| {
+                    origin.is_none_or(|(ia, ib)| {
+                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
+                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
+                        sw != Sign::Zero && sw != se
+                    })
+                });
+            let hops = rule.hops.get(st..).unwrap_or(&[]);
+            let best = match self.map_dir_exact(hops, rule.eye, rule.dir) {
+                Some(d) => nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
-                    let (on, along) = if exact {
-                        let along = rule.dir.0 * w.0 + rule.dir.1 * w.1;
-                        (cross(rule.dir, w) == 0, along as f64)
-                    } else {
+                    let along = Wide::dot(d, w)?;
+                    (Wide::cross(d, w)?.sign() == Sign::Zero).then_some(along)
+                }),
+                None => {
+                    // Past the exact budget (more hops than `Wide` holds): `f64`.
+                    let d = self.map_dir(hops, rule.eye, rule.dir);
+                    nearest_on_ray(candidates, |v| {
+                        let w = diff(self.qpoint(v), eye);
                         let wf = (w.0 as f64, w.1 as f64);
                         let c = d.0 * wf.1 - d.1 * wf.0;
                         let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
-                        (libm::fabs(c) <= 1e-12 * scale, d.0 * wf.0 + d.1 * wf.1)
-                    };
-                    if !on || along <= 0.0 || best.is_some_and(|(b, _)| b <= along) {
-                        continue;
-                    }
-                    if let Some((ia, ib)) = origin {
-                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
-                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
-                        if sw == Sign::Zero || sw == se {
-                            continue;
-                        }
-                    }
-                    best = Some((along, v));
+                        (libm::fabs(c) <= 1e-12 * scale).then_some(d.0 * wf.0 + d.1 * wf.1)
+                    })
                 }
-            }
-            if let Some((_, v)) = best {
-                return Some(v);
+            };
+            if best.is_some() {
+                return best;
             }
         }
         rule.fallback
     }
+
+    /// [`Tree::map_dir`] exactly: the direction scaled by the hit's denominator at every
+    /// hop, `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one
+    /// of at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a
+    /// 54-bit direction fit and the final cross with a query difference too.
+    fn map_dir_exact(
+        &self,
+        hops: &[Hop],
+        eye: QueryPoint,
+        dir: (i128, i128),
+    ) -> Option<(Wide, Wide)> {
+        let mut d = (Wide::from_i128(dir.0), Wide::from_i128(dir.1));
+        let mut cur = eye;
+        for hop in hops.iter().rev() {
+            let a = self.qpoint(hop.a);
+            let e = diff(self.qpoint(hop.b), a);
+            let den = Wide::cross(d, e)?;
+            d = match den.sign() {
+                // Along the edge's line: its midpoint, as `map_dir`.
+                Sign::Zero => {
+                    let ap = diff(a, hop.prev);
+                    (
+                        Wide::from_i128(2 * ap.0 + e.0),
+                        Wide::from_i128(2 * ap.1 + e.1),
+                    )
+                }
+                // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
+                s => {
+                    let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
+                    let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
+                    let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
+                    if s == Sign::Negative {
+                        (x.neg(), y.neg())
+                    } else {
+                        (x, y)
+                    }
+                }
+            };
+            cur = hop.prev;
+        }
+        Some(d)
+    }
+}
+
+/// The candidate vertex on the ray nearest to its origin: `along(v)` is `None` off the
+/// ray, else the (scaled) distance along it, which must be positive.
+fn nearest_on_ray<K: PartialOrd + Default>(
+    candidates: impl Iterator<Item = usize>,
+    along: impl Fn(usize) -> Option<K>,
+) -> Option<usize> {
+    let mut best: Option<(K, usize)> = None;
+    for v in candidates {
+        let Some(k) = along(v) else { continue };
+        if k > K::default() && best.as_ref().is_none_or(|(b, _)| k < *b) {
+            best = Some((k, v));
+        }
+    }
+    best.map(|(_, v)| v)
 }

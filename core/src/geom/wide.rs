@@ -1,0 +1,213 @@
+//! Fixed-width signed integers for the exact tests that outgrow `i128`: a ray-tree
+//! boundary direction mapped back through several hops grows by about 102 bits per hop
+//! (`walk::tree`). Sign and magnitude, 1024-bit magnitude; every operation is checked and
+//! returns `None` instead of wrapping, so a caller can fall back when a budget is exceeded.
+
+use core::cmp::Ordering;
+
+use super::Sign;
+
+const LIMBS: usize = 16;
+
+/// A signed integer of magnitude below 2¹⁰²⁴.
+#[derive(Clone, Copy, PartialEq, Eq, Default, Debug)]
+pub(crate) struct Wide {
+    negative: bool,
+    /// Little-endian limbs.
+    mag: [u64; LIMBS],
+}
+
+impl Wide {
+    /// Zero is never negative, so that `==` is equality of values.
+    fn new(negative: bool, mag: [u64; LIMBS]) -> Wide {
+        let negative = negative && mag.iter().any(|&l| l != 0);
+        Wide { negative, mag }
+    }
+
+    pub(crate) fn from_i128(v: i128) -> Wide {
+        let m = v.unsigned_abs();
+        let mut mag = [0; LIMBS];
+        mag[0] = m as u64;
+        mag[1] = (m >> 64) as u64;
+        Wide::new(v < 0, mag)
+    }
+
+    pub(crate) fn sign(&self) -> Sign {
+        match (self.mag.iter().all(|&l| l == 0), self.negative) {
+            (true, _) => Sign::Zero,
+            (false, true) => Sign::Negative,
+            (false, false) => Sign::Positive,
+        }
+    }
+
+    pub(crate) fn neg(self) -> Wide {
+        Wide::new(!self.negative, self.mag)
+    }
+
+    /// `self · k`, `None` past 2¹⁰²⁴.
+    pub(crate) fn mul_i128(&self, k: i128) -> Option<Wide> {
+        let k = (k < 0, k.unsigned_abs());
+        let (k0, k1) = (k.1 as u64, (k.1 >> 64) as u64);
+        let mut mag = [0u64; LIMBS];
+        for (shift, kl) in [(0, k0), (1, k1)] {
+            if kl == 0 {
+                continue;
+            }
+            let mut carry: u128 = 0;
+            for i in 0..LIMBS {
+                let acc = u128::from(self.mag[i]) * u128::from(kl) + carry;
+                match mag.get_mut(i + shift) {
+                    Some(slot) => {
+                        let sum = u128::from(*slot) + (acc & u128::from(u64::MAX));
+                        *slot = sum as u64;
+                        carry = (acc >> 64) + (sum >> 64);
+                    }
+                    None if acc != 0 => return None,
+                    None => carry = 0,
+                }
+            }
+            if carry != 0 {
+                return None;
+            }
+        }
+        Some(Wide::new(self.negative != k.0, mag))
+    }
+
+    /// `self + o`, `None` past 2¹⁰²⁴.
+    pub(crate) fn add(&self, o: &Wide) -> Option<Wide> {
+        if self.negative == o.negative {
+            let mut mag = [0u64; LIMBS];
+            let mut carry = false;
+            for (i, slot) in mag.iter_mut().enumerate() {
+                let (s, c1) = self.mag[i].overflowing_add(o.mag[i]);
+                let (s, c2) = s.overflowing_add(u64::from(carry));
+                *slot = s;
+                carry = c1 || c2;
+            }
+            return (!carry).then_some(Wide::new(self.negative, mag));
+        }
+        // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
+        let (big, small) = match cmp_mag(&self.mag, &o.mag) {
+            Ordering::Less => (o, self),
+            _ => (self, o),
+        };
+        let mut mag = [0u64; LIMBS];
+        let mut borrow = false;
+        for (i, slot) in mag.iter_mut().enumerate() {
+            let (d, b1) = big.mag[i].overflowing_sub(small.mag[i]);
+            let (d, b2) = d.overflowing_sub(u64::from(borrow));
+            *slot = d;
+            borrow = b1 || b2;
+        }
+        Some(Wide::new(big.negative, mag))
+    }
+
+    /// `self − o`.
+    pub(crate) fn sub(&self, o: &Wide) -> Option<Wide> {
+        self.add(&o.neg())
+    }
+
+    /// `u.0 · v.1 − u.1 · v.0`.
+    pub(crate) fn cross(u: (Wide, Wide), v: (i128, i128)) -> Option<Wide> {
+        u.0.mul_i128(v.1)?.sub(&u.1.mul_i128(v.0)?)
+    }
+
+    /// `u.0 · v.0 + u.1 · v.1`.
+    pub(crate) fn dot(u: (Wide, Wide), v: (i128, i128)) -> Option<Wide> {
+        u.0.mul_i128(v.0)?.add(&u.1.mul_i128(v.1)?)
+    }
+}
+
+impl Ord for Wide {
+    fn cmp(&self, o: &Wide) -> Ordering {
+        match (self.negative, o.negative) {
+            (false, true) => Ordering::Greater,
+            (true, false) => Ordering::Less,
+            (false, false) => cmp_mag(&self.mag, &o.mag),
+            (true, true) => cmp_mag(&o.mag, &self.mag),
+        }
+    }
+}
+
+impl PartialOrd for Wide {
+    fn partial_cmp(&self, o: &Wide) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+fn cmp_mag(a: &[u64; LIMBS], b: &[u64; LIMBS]) -> Ordering {
+    a.iter().rev().cmp(b.iter().rev())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn w(v: i128) -> Wide {
+        Wide::from_i128(v)
+    }
+
+    #[test]
+    fn small_values_agree_with_i128() {
+        let vals = [
+            0i128,
+            1,
+            -1,
+            7,
+            -13,
+            i64::MAX as i128,
+            i64::MIN as i128,
+            1 << 62,
+            -(1 << 62) + 3,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                assert_eq!(w(a).add(&w(b)), Some(w(a + b)), "{a} + {b}");
+                assert_eq!(w(a).sub(&w(b)), Some(w(a - b)), "{a} - {b}");
+                assert_eq!(w(a).mul_i128(b), Some(w(a * b)), "{a} * {b}");
+                assert_eq!(w(a).cmp(&w(b)), a.cmp(&b));
+            }
+        }
+    }
+
+    /// The extremes: (2¹²⁷ − 1)⁸ < 2¹⁰¹⁶ fits, one more factor overflows; carries run
+    /// through every limb; cancellation to zero at full width.
+    #[test]
+    fn extremes() {
+        let m = i128::MAX;
+        let mut p = w(m);
+        for _ in 0..7 {
+            p = p.mul_i128(m).unwrap();
+        }
+        assert_eq!(p.sign(), Sign::Positive);
+        assert!(p.mul_i128(m).is_none());
+        assert!(p.mul_i128(i128::MIN).is_none());
+        assert_eq!(p.mul_i128(-1).unwrap().sign(), Sign::Negative);
+        assert_eq!(p.sub(&p).unwrap().sign(), Sign::Zero);
+        // (2¹²⁷ − 1)⁸ · 2⁸ < 2¹⁰²⁴, and adding it to itself overflows.
+        let top = p.mul_i128(1 << 8).unwrap();
+        assert!(top.add(&top).is_none());
+        assert_eq!(top.sub(&top.neg()), None);
+        // All-ones magnitude plus one carries out.
+        let ones = Wide {
+            negative: false,
+            mag: [u64::MAX; LIMBS],
+        };
+        assert!(ones.add(&w(1)).is_none());
+        assert_eq!(ones.sub(&w(1)).unwrap().add(&w(1)), Some(ones));
+        assert_eq!(ones.cmp(&ones.sub(&w(1)).unwrap()), Ordering::Greater);
+        assert_eq!(ones.neg().cmp(&ones), Ordering::Less);
+        assert_eq!(w(0).neg(), w(0));
+        // x² − (x − 2)(x + 2) = 4 far beyond i128: x = 2³⁰⁰.
+        let x = w(1 << 100)
+            .mul_i128(1 << 100)
+            .unwrap()
+            .mul_i128(1 << 100)
+            .unwrap();
+        let a = x.sub(&w(2)).unwrap();
+        let b = x.add(&w(2)).unwrap();
+        let xx = Wide::cross((x, a), (2, 1)).unwrap(); // x − 2a = −x + 4
+        assert_eq!(xx.add(&x).unwrap(), w(4));
+        assert_eq!(Wide::dot((a, b), (1, -1)).unwrap(), w(-4));
+    }
+}
