@@ -2,37 +2,115 @@
 //! (which includes this file), so the host checks the exact code path the device runs: no
 //! std, no heap, no recursion.
 //!
-//! The data comes from `scene_data.rs` (generated, checked for staleness by the host test):
-//! the scene's polygons, the complex's vertices and cylinders as statics in flash, and the
-//! viewpoints. [`complex`] takes the vertices and cylinders as slices, so when the device
-//! format lands they come from `decode_into` of an `include_bytes!` blob into RAM buffers
-//! instead, and nothing else changes.
+//! The complex is the file `firmware/hall.vcx` (`docs/format.md`), embedded with
+//! `include_bytes!` and trusted in nothing: [`decode`] checks it with
+//! `format::decode_into` into static buffers ([`Arenas`]: the scene part's scratch, the
+//! complex's vertices and cylinders), [`complex`] rebuilds the derived state into [`Ram`]
+//! with `Complex::from_slices`, and [`views`] walks the view from each viewpoint of
+//! `viewpoints.rs` (generated, as the `.vcx` is, and checked for staleness by the host
+//! test). The buffer sizes are the file's header counts, read at compile time.
 
+use vcx::format::{self, Decoded, FormatError, SceneObject, Scratch};
 use vcx::geom::sos::Angle;
-use vcx::geom::QueryPoint;
+use vcx::geom::{Point, QueryPoint};
+use vcx::line_space::{Bound, Chain};
 use vcx::partition::{
     BorderBuffers, BorderSizes, BufferTooSmall, Complex, Cylinder, CylinderId, Slices, Vertex,
 };
-use vcx::scene::FixedScene;
 use vcx::walk::{view_capacity, view_into, ViewInterval, WalkError};
-use vcx::{SceneError, SceneRef};
+use vcx::{ObjectId, SceneRef};
 
-use crate::scene_data as data;
+use crate::viewpoints::VIEWPOINTS;
+
+/// The embedded file, as `vcx build std-demo/scenes/hall.json -o firmware/hall.vcx
+/// --history never` writes it (the host test checks that it is). Postcard needs no
+/// alignment.
+const FILE: &[u8] = include_bytes!("../hall.vcx");
+
+/// The embedded file: one copy in flash (a `static`, where each use of the `const` could
+/// be its own).
+pub static VCX: &[u8] = FILE;
+
+/// A `u32` header field of the embedded file, at compile time (0 if the file is too short:
+/// then `decode_into` reports it, at run time, as the error it is).
+const fn header(offset: usize) -> usize {
+    match FILE.split_at_checked(offset) {
+        Some((_, rest)) => match rest.first_chunk::<4>() {
+            Some(b) => u32::from_le_bytes(*b) as usize,
+            None => 0,
+        },
+        None => 0,
+    }
+}
+
+/// Objects of the scene (the header's count).
+pub const OBJECTS: usize = header(format::offset::OBJECTS);
+/// Vertices of the scene.
+pub const SCENE_VERTICES: usize = header(format::offset::SCENE_VERTICES);
+/// Vertices of the complex.
+pub const COMPLEX_VERTICES: usize = header(format::offset::COMPLEX_VERTICES);
+/// Cylinders of the complex.
+pub const CYLINDERS: usize = header(format::offset::CYLINDERS);
 
 /// Whether vertex angles are kept in RAM (`size_of::<Angle>()` bytes per complex vertex)
 /// or computed when a walk meets a wall (slower walks, less RAM).
 pub const WITH_ANGLES: bool = false;
 
 /// Sizes of the derived-state buffers, from the counts alone.
-pub const SIZES: BorderSizes =
-    BorderSizes::for_counts(data::OBJECTS, data::COMPLEX_VERTICES, data::CYLINDERS);
+pub const SIZES: BorderSizes = BorderSizes::for_counts(OBJECTS, COMPLEX_VERTICES, CYLINDERS);
 /// Length of the angle buffer (0: computed on demand).
 pub const ANGLES: usize = if WITH_ANGLES { SIZES.angles } else { 0 };
 /// Intervals the output buffer holds: enough for any view of the scene.
-pub const CAPACITY: usize = view_capacity(data::OBJECTS);
+pub const CAPACITY: usize = view_capacity(OBJECTS);
 
-/// The validated scene, in fixed-capacity storage.
-pub type Scene = FixedScene<{ data::SCENE_VERTICES }, { data::OBJECTS }>;
+/// The decoded file: the scene (validated into fixed-capacity storage) and the complex's
+/// arenas, borrowed from [`Arenas`].
+pub type File<'a> = Decoded<'a, SCENE_VERTICES, OBJECTS>;
+
+/// A blank point (checked when compiled: (0, 0) is in range).
+const ORIGIN: Point = match Point::from_raw(0, 0) {
+    Some(p) => p,
+    None => panic!("(0, 0) is a point"),
+};
+
+/// A blank cylinder of all-zero bytes, so that a `static` of [`Arenas`] lands in `.bss`
+/// rather than in `.data` with a flash image of blanks: `format::BLANK_CYLINDER` has no
+/// chains, and `None` of a chain is a niche value of its bound (2), not 0.
+const ZERO_CYLINDER: Cylinder = Cylinder {
+    bottom: Some(CHAIN_ZERO),
+    top: Some(CHAIN_ZERO),
+    ..format::BLANK_CYLINDER
+};
+const CHAIN_ZERO: Chain = Chain {
+    object: ObjectId(0),
+    bound: Bound::Lower,
+};
+
+/// What `decode_into` fills: the scene part's scratch (free again after decoding) and the
+/// complex's vertices and cylinders, which the walk reads. Blank at start.
+#[derive(Debug)]
+pub struct Arenas {
+    /// Objects of the scene part (scratch).
+    pub objects: [SceneObject; OBJECTS],
+    /// Points of the scene part (scratch).
+    pub points: [Point; SCENE_VERTICES],
+    /// Vertices of the complex.
+    pub vertices: [Vertex; COMPLEX_VERTICES],
+    /// Cylinders of the complex.
+    pub cylinders: [Cylinder; CYLINDERS],
+}
+
+impl Arenas {
+    /// Blank buffers.
+    pub const fn new() -> Arenas {
+        Arenas {
+            objects: [SceneObject::BLANK; OBJECTS],
+            points: [ORIGIN; SCENE_VERTICES],
+            vertices: [format::BLANK_VERTEX; COMPLEX_VERTICES],
+            cylinders: [ZERO_CYLINDER; CYLINDERS],
+        }
+    }
+}
 
 /// The derived state of the complex: all zero at start, so a `static` of it lands in
 /// `.bss` (no flash image).
@@ -75,8 +153,8 @@ pub const fn out() -> Out {
 /// What can go wrong on the device.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum Error {
-    /// The embedded scene does not validate.
-    Scene(SceneError),
+    /// The embedded file does not decode (or its scene does not validate).
+    Format(FormatError),
     /// A derived-state buffer is too short.
     Buffers(BufferTooSmall),
     /// The walk failed.
@@ -87,15 +165,22 @@ pub enum Error {
     Taken,
 }
 
-/// Validates the embedded scene into fixed-capacity storage. (`inline(never)` here and
-/// below: the firmware measures each phase's stack below `main`.)
+/// Decodes and checks `bytes` (the embedded [`VCX`] on the device) into `arenas`: the
+/// scene validated into fixed-capacity storage, the complex's vertices and cylinders with
+/// every id and link checked. (`inline(never)` here and below: the firmware measures each
+/// phase's stack below `main`.)
 #[inline(never)]
-pub fn scene() -> Result<Scene, Error> {
-    Scene::new(data::POLYGONS.iter().map(|&(m, p)| (m, p))).map_err(Error::Scene)
+pub fn decode<'a>(bytes: &[u8], arenas: &'a mut Arenas) -> Result<File<'a>, Error> {
+    let scratch = Scratch {
+        objects: &mut arenas.objects,
+        points: &mut arenas.points,
+    };
+    format::decode_into(bytes, scratch, &mut arenas.vertices, &mut arenas.cylinders)
+        .map_err(Error::Format)
 }
 
-/// The complex over `vertices` and `cylinders` (statics in flash here), with its derived
-/// state rebuilt into `ram`.
+/// The complex over the decoded `vertices` and `cylinders`, with its derived state rebuilt
+/// into `ram`.
 #[inline(never)]
 pub fn complex<'a>(
     scene: &SceneRef<'_>,
@@ -122,7 +207,7 @@ pub fn views(
     mut each: impl FnMut(usize, &[ViewInterval]),
 ) -> Result<u32, Error> {
     let mut checksum = 0u32;
-    for (k, &(x, y)) in data::VIEWPOINTS.iter().enumerate() {
+    for (k, &(x, y)) in VIEWPOINTS.iter().enumerate() {
         let q = QueryPoint::from_raw(x, y).ok_or(Error::Viewpoint(k))?;
         let n = view_into(complex, scene, q, out).map_err(Error::Walk)?;
         let view = out.get(..n).unwrap_or(&[]);

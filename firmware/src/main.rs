@@ -1,25 +1,27 @@
 //! Firmware-style proof that `vcx` walks a complex with no std and no heap.
 //!
-//! The scene's polygons and its complex (vertices and cylinders) are statics in flash
-//! (`scene_data.rs`, generated and checked for staleness by the host test
-//! `tests/tests/no_alloc.rs`). At start the scene is validated into fixed-capacity storage
-//! on the stack, the complex's derived state is rebuilt into one static RAM block, and
-//! the view from each embedded viewpoint is walked into a fixed output buffer (`app.rs`,
-//! which the host test runs on the same data and checks against the exact reference).
+//! The scene and its complex are one file in the binary complex format (`hall.vcx`,
+//! embedded with `include_bytes!`; the host test `tests/tests/no_alloc.rs` checks that it
+//! is what `vcx build` writes). At start the file is decoded and checked by
+//! `format::decode_into` into static buffers (the scene validated into fixed-capacity
+//! storage on the stack), the complex's derived state is rebuilt into a second static
+//! block, and the view from each embedded viewpoint is walked into a fixed output buffer
+//! (`app.rs`, which the host test runs on the same bytes and checks against the exact
+//! reference). Every failure is an `app::Error`; nothing panics on the data.
 //!
 //! The stack is painted before the walk and scanned after it: the high-water mark is left
 //! in [`STACK_USED`] for a debugger, and with the feature `qemu` (an MPS2 board under QEMU,
 //! see `memory-qemu.x`) printed on UART0 with the view checksum.
 //!
 //! `unsafe` here (the core forbids it): the take-once cell handing `main` the static RAM
-//! block, and the volatile reads and writes of stack painting and the QEMU UART.
+//! blocks, and the volatile reads and writes of stack painting and the QEMU UART.
 #![no_std]
 #![no_main]
 
 mod app;
-#[rustfmt::skip]
-mod scene_data;
 mod stack;
+#[rustfmt::skip]
+mod viewpoints;
 
 use core::cell::UnsafeCell;
 use core::hint::black_box;
@@ -29,8 +31,8 @@ use cortex_m_rt::entry;
 use panic_halt as _;
 
 /// Bytes of stack (from painting), for a debugger to read: `main`'s own frames (with the
-/// validated scene), and below them at most the setup (scene validation and rebuild of the
-/// derived state) and the view walks.
+/// validated scene), and below them at most the setup (decoding and checking the file,
+/// rebuilding the derived state) and the view walks.
 pub static STACK_USED: [AtomicU32; 3] = [AtomicU32::new(0), AtomicU32::new(0), AtomicU32::new(0)];
 
 /// A static that `main` takes once, mutably. Single core, and nothing but `main` calls
@@ -64,33 +66,36 @@ impl<T> TakeOnce<T> {
     }
 }
 
-/// The walk's RAM besides the stack, in statics so that `size -A` reports it: the derived
-/// state (zero at start: `.bss`) and the output buffer (`.data`).
+/// The walk's RAM besides the stack, in statics so that `size -A` reports it: the decoded
+/// arenas and the derived state (zero at start: `.bss`), and the output buffer (`.data`).
+static ARENAS: TakeOnce<app::Arenas> = TakeOnce::new(app::Arenas::new());
 static RAM: TakeOnce<app::Ram> = TakeOnce::new(app::Ram::new());
 static OUT: TakeOnce<app::Out> = TakeOnce::new(app::out());
 
 #[entry]
 fn main() -> ! {
-    // Phase 1: validate the scene and rebuild the derived state; phase 2: the view walks.
-    // The stack is painted before each phase and its high-water mark read after it.
+    // Phase 1: decode and check the file, rebuild the derived state; phase 2: the view
+    // walks. The stack is painted before each phase and its high-water mark read after it.
     let sp = stack::paint();
-    let scene = app::scene();
-    let complex = match (&scene, RAM.take()) {
-        (Ok(scene), Some(ram)) => app::complex(
-            &scene.as_ref(),
-            &scene_data::VERTICES,
-            &scene_data::CYLINDER_DATA,
-            ram,
-        ),
+    let file = match ARENAS.take() {
+        Some(arenas) => app::decode(app::VCX, arenas),
+        None => Err(app::Error::Taken),
+    };
+    let complex = match (&file, RAM.take()) {
+        (Ok(file), Some(ram)) => {
+            app::complex(&file.scene.as_ref(), file.vertices, file.cylinders, ram)
+        }
         (Err(e), _) => Err(*e),
         (_, None) => Err(app::Error::Taken),
     };
     let setup_stack = stack::used(sp);
     let sp = stack::paint();
-    let result = match (&scene, &complex, OUT.take()) {
-        (Ok(scene), Ok(complex), Some(out)) => app::views(complex, &scene.as_ref(), out, |_, v| {
-            black_box(v);
-        }),
+    let result = match (&file, &complex, OUT.take()) {
+        (Ok(file), Ok(complex), Some(out)) => {
+            app::views(complex, &file.scene.as_ref(), out, |_, v| {
+                black_box(v);
+            })
+        }
         (Err(e), _, _) | (_, Err(e), _) => Err(*e),
         (_, _, None) => Err(app::Error::Taken),
     };

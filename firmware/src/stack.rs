@@ -80,11 +80,12 @@ pub fn report(main: u32, setup: u32, walk: u32, result: &Result<u32, crate::app:
     let _ = writeln!(
         Uart,
         "vcx-firmware: size_of Angle {} B, ViewInterval {} B, Cylinder {} B, Vertex {} B, \
-         Ram {} B, Out {} B",
+         Arenas {} B, Ram {} B, Out {} B",
         size_of::<vcx::geom::sos::Angle>(),
         size_of::<vcx::walk::ViewInterval>(),
         size_of::<vcx::partition::Cylinder>(),
         size_of::<vcx::partition::Vertex>(),
+        size_of::<crate::app::Arenas>(),
         size_of::<crate::app::Ram>(),
         size_of::<crate::app::Out>(),
     );

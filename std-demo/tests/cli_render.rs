@@ -220,3 +220,40 @@ fn bad_input_is_one_error_line_and_status_2() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("object 0"));
 }
+
+/// `vcx bench views --fov`: a frame per viewpoint (sweep, per-column hits, exact coverage);
+/// the sweep is the same as without `--fov`, and a field of view out of range is an error.
+#[test]
+fn bench_views_frames() {
+    let scene = example("hall.json");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "views",
+            scene.to_str().unwrap(),
+            "--random",
+            "4",
+            "--repeat",
+            "1",
+            "--depth",
+            "2",
+        ];
+        args.extend_from_slice(extra);
+        Command::new(VCX).args(&args).output().unwrap()
+    };
+    let full = run(&[]);
+    let framed = run(&["--fov", "90", "--heading", "30", "--width", "64"]);
+    assert!(full.status.success() && framed.status.success());
+    let (a, b): (serde_json::Value, serde_json::Value) = (
+        serde_json::from_slice(&full.stdout).unwrap(),
+        serde_json::from_slice(&framed.stdout).unwrap(),
+    );
+    assert!(a.get("us_per_frame").is_none());
+    assert!(b["us_per_frame"].as_f64().unwrap() > 0.0);
+    assert_eq!(b["frame"]["width"], 64);
+    assert_eq!(a["intervals_per_view"], b["intervals_per_view"]);
+    let bad = run(&["--fov", "200"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.lines().count() == 1 && err.contains("--fov"), "{err}");
+}

@@ -6,22 +6,27 @@
 //!   Other tests of this binary run on other threads and the allocator is global, so each
 //!   measurement is repeated and the smallest count must be zero: an allocation on the walk
 //!   path happens on every repetition and still fails the test.
-//! * The firmware (`firmware/`) embeds `firmware/src/scene_data.rs`, generated here from
-//!   `std-demo/scenes/hall.json`; `scene_data_is_fresh` fails when it differs from what a
-//!   fresh build produces. Regenerate with
-//!   `cargo test -p vcx-tests --test no_alloc -- --ignored regenerate_scene_data`.
-//! * `firmware/src/app.rs` is included here verbatim and run on the same data: its views
-//!   are compared with `walk::view` on the owned complex and with the exact reference.
+//! * The firmware (`firmware/`) embeds `firmware/hall.vcx`, the complex file of
+//!   `std-demo/scenes/hall.json` as `vcx build std-demo/scenes/hall.json -o
+//!   firmware/hall.vcx --history never` writes it, and its viewpoints in
+//!   `firmware/src/viewpoints.rs`; `firmware_vcx_is_fresh` and
+//!   `firmware_viewpoints_are_fresh` fail when either differs from what a fresh build
+//!   produces. Regenerate both with
+//!   `cargo test -p vcx-tests --test no_alloc -- --ignored regenerate_firmware_data`.
+//! * `firmware/src/app.rs` is included here verbatim and run on the same bytes (decoding,
+//!   rebuild, views, counted by the allocator): its views are compared with `walk::view`
+//!   on the owned complex and with the exact reference.
 
 use core::fmt::Write as _;
 use std::alloc::System;
 use std::sync::Mutex;
 
 use stats_alloc::{Region, StatsAlloc, INSTRUMENTED_SYSTEM};
+use vcx::format::{EncodeOptions, FormatError};
 use vcx::geom::sos::Angle;
-use vcx::line_space::Bound;
 use vcx::partition::{
-    build_by_sweep, BorderBuffers, BorderSizes, Complex, Cylinder, CylinderId, Wall,
+    build_by_sweep, BorderBuffers, BorderSizes, BuildOptions, Complex, Cylinder, CylinderId,
+    History,
 };
 use vcx::walk::{view, view_capacity, view_into, ViewInterval, WalkError};
 use vcx::{Material, QueryPoint, Scene, SceneRef, SubScene};
@@ -30,10 +35,9 @@ use vcx_demo::generate::{generate, SceneKind};
 #[global_allocator]
 static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
-#[allow(dead_code)]
 #[rustfmt::skip]
-#[path = "../../firmware/src/scene_data.rs"]
-mod scene_data;
+#[path = "../../firmware/src/viewpoints.rs"]
+mod viewpoints;
 
 #[allow(dead_code)]
 #[path = "../../firmware/src/app.rs"]
@@ -236,7 +240,10 @@ fn short_buffers_are_errors() {
 // The firmware's data and code path.
 
 const SOURCE_SCENE: &str = "std-demo/scenes/hall.json";
-const FIRMWARE_VIEWPOINTS: usize = 6;
+const FIRMWARE_VCX: &str = "firmware/hall.vcx";
+const FIRMWARE_VIEWPOINTS: &str = "firmware/src/viewpoints.rs";
+/// Viewpoints the firmware walks.
+const VIEWPOINT_COUNT: usize = 6;
 
 fn repo_path(rel: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -244,203 +251,47 @@ fn repo_path(rel: &str) -> std::path::PathBuf {
         .join(rel)
 }
 
-/// The source of `firmware/src/scene_data.rs` for the scene file.
-fn generate_scene_data() -> String {
-    let file = vcx_demo::scene_file::load(repo_path(SOURCE_SCENE)).expect("scene file");
-    let s = file.scene.as_ref();
-    let c = build_by_sweep(&s).expect("build");
-    let points = viewpoints(&s, FIRMWARE_VIEWPOINTS);
-    let none = |x: Option<u32>| x.map_or("N".to_string(), |v| v.to_string());
-    let chain = |ch: Option<vcx::line_space::Chain>| {
-        none(ch.map(|ch| 2 * ch.object.0 + u32::from(ch.bound == Bound::Upper)))
+fn source_scene() -> Scene {
+    vcx_demo::scene_file::load(repo_path(SOURCE_SCENE))
+        .expect("scene file")
+        .scene
+}
+
+/// The bytes of `firmware/hall.vcx`, as `vcx build SOURCE_SCENE -o firmware/hall.vcx
+/// --history never` writes them (`std-demo/src/cmd/build.rs`): the randomized construction
+/// with seed 0, its live partition encoded without history, seed recorded.
+fn generate_vcx() -> Vec<u8> {
+    let scene = source_scene();
+    let s = scene.as_ref();
+    let options = BuildOptions {
+        seed: 0,
+        first: Vec::new(),
+        ..Default::default()
     };
-    let wall = |w: Wall| match w {
-        Wall::Zero => "N".to_string(),
-        Wall::Vertex(v) => v.index().to_string(),
+    let history = History::build(&s, &options).expect("build");
+    let complex = history.complex(&s).expect("live partition");
+    complex.validate(&s).expect("valid");
+    let options = EncodeOptions {
+        seed: Some(0),
+        compacted: true,
     };
-    let bound = |b: Bound| u32::from(b == Bound::Upper);
+    vcx::format::encode(&s, &complex, None, &options).expect("encode")
+}
+
+/// The source of `firmware/src/viewpoints.rs`.
+fn generate_viewpoints() -> String {
+    let scene = source_scene();
+    let points = viewpoints(&scene.as_ref(), VIEWPOINT_COUNT);
     let mut o = String::new();
     let w = &mut o;
     let _ = writeln!(
         w,
         "//! Generated from `{SOURCE_SCENE}` by\n//! `cargo test -p vcx-tests --test no_alloc -- \
-         --ignored regenerate_scene_data`;\n//! do not edit (`scene_data_is_fresh` checks it). \
-         The scene's polygons (stored,\n//! counter-clockwise), the vertices and cylinders of \
-         its complex (`build_by_sweep`) and\n//! viewpoints. Not formatted \
-         (`#[rustfmt::skip]` where it is declared).\n\n\
-         use vcx::line_space::{{Bitangent, Bound, Chain}};\n\
-         use vcx::partition::{{Cylinder, CylinderId, Vertex, VertexId, Wall}};\n\
-         use vcx::{{Material, ObjectId, Point}};\n"
-    );
-    let _ = writeln!(
-        w,
-        "/// Objects of the scene.\npub const OBJECTS: usize = {};",
-        s.len()
-    );
-    let _ = writeln!(
-        w,
-        "/// Vertices of the scene.\npub const SCENE_VERTICES: usize = {};",
-        s.vertices().len()
-    );
-    let _ = writeln!(
-        w,
-        "/// Vertices of the complex.\npub const COMPLEX_VERTICES: usize = {};",
-        c.vertices().len()
-    );
-    let _ = writeln!(
-        w,
-        "/// Cylinders of the complex.\npub const CYLINDERS: usize = {};\n",
-        c.cylinders().len()
-    );
-    w.push_str(
-        r#"const N: u32 = u32::MAX;
-
-const fn p(x: i32, y: i32) -> Point {
-    match Point::from_raw(x, y) {
-        Some(p) => p,
-        None => panic!("coordinate out of range"),
-    }
-}
-
-const fn bound(b: u32) -> Bound {
-    if b == 0 {
-        Bound::Lower
-    } else {
-        Bound::Upper
-    }
-}
-
-const fn v(a: u32, i: usize, ab: u32, b: u32, j: usize, bb: u32) -> Vertex {
-    Vertex {
-        bitangent: Bitangent {
-            first_object: ObjectId(a),
-            first: i,
-            first_bound: bound(ab),
-            second_object: ObjectId(b),
-            second: j,
-            second_bound: bound(bb),
-        },
-    }
-}
-
-const fn object(x: u32) -> Option<ObjectId> {
-    if x == N {
-        None
-    } else {
-        Some(ObjectId(x))
-    }
-}
-
-const fn chain(x: u32) -> Option<Chain> {
-    if x == N {
-        None
-    } else {
-        Some(Chain {
-            object: ObjectId(x / 2),
-            bound: bound(x % 2),
-        })
-    }
-}
-
-const fn wall(x: u32) -> Wall {
-    if x == N {
-        Wall::Zero
-    } else {
-        Wall::Vertex(VertexId::from_raw(x))
-    }
-}
-
-const fn cylinder(x: u32) -> Option<CylinderId> {
-    if x == N {
-        None
-    } else {
-        Some(CylinderId::from_raw(x))
-    }
-}
-
-/// A cylinder: floor, ceiling, bottom and top chain (2·object + upper), left and right
-/// wall (vertex), left and right neighbour; `N` for none (θ = 0 for a wall).
-#[allow(clippy::too_many_arguments)]
-const fn c(f: u32, g: u32, b: u32, t: u32, l: u32, r: u32, ln: u32, rn: u32) -> Cylinder {
-    Cylinder {
-        floor: object(f),
-        ceiling: object(g),
-        bottom: chain(b),
-        top: chain(t),
-        left: wall(l),
-        right: wall(r),
-        left_neighbour: cylinder(ln),
-        right_neighbour: cylinder(rn),
-    }
-}
-
-"#,
-    );
-    for (k, obj) in s.objects().iter().enumerate() {
-        let pts: Vec<String> = s
-            .polygon(obj)
-            .iter()
-            .map(|p| format!("p({}, {})", p.x(), p.y()))
-            .collect();
-        let _ = writeln!(
-            w,
-            "static O{k}: [Point; {}] = [{}];",
-            pts.len(),
-            pts.join(", ")
-        );
-    }
-    let _ = writeln!(
-        w,
-        "\n/// The polygons, counter-clockwise.\npub static POLYGONS: [(Material, &[Point]); OBJECTS] = ["
-    );
-    for (k, obj) in s.objects().iter().enumerate() {
-        let m = match obj.material {
-            Material::Opaque => "Opaque",
-            Material::Mirror => "Mirror",
-            Material::Screen => "Screen",
-            Material::Refractive { .. } => panic!("the firmware scene has no refractive object"),
-        };
-        let _ = writeln!(w, "    (Material::{m}, &O{k}),");
-    }
-    let _ = writeln!(
-        w,
-        "];\n\n/// The vertices of the complex (first object, vertex, bound; second …).\n\
-         pub static VERTICES: [Vertex; COMPLEX_VERTICES] = ["
-    );
-    for v in c.vertices() {
-        let b = v.bitangent;
-        let _ = writeln!(
-            w,
-            "    v({}, {}, {}, {}, {}, {}),",
-            b.first_object.0,
-            b.first,
-            bound(b.first_bound),
-            b.second_object.0,
-            b.second,
-            bound(b.second_bound)
-        );
-    }
-    let _ = writeln!(
-        w,
-        "];\n\n/// The cylinders of the complex.\npub static CYLINDER_DATA: [Cylinder; CYLINDERS] = ["
-    );
-    for cy in c.cylinders() {
-        let _ = writeln!(
-            w,
-            "    c({}, {}, {}, {}, {}, {}, {}, {}),",
-            none(cy.floor.map(|o| o.0)),
-            none(cy.ceiling.map(|o| o.0)),
-            chain(cy.bottom),
-            chain(cy.top),
-            wall(cy.left),
-            wall(cy.right),
-            none(cy.left_neighbour.map(|c| c.index() as u32)),
-            none(cy.right_neighbour.map(|c| c.index() as u32)),
-        );
-    }
-    let _ = writeln!(
-        w,
-        "];\n\n/// Viewpoints (raw query coordinates, 2⁻³²).\npub static VIEWPOINTS: [(i64, i64); {}] = [",
+         --ignored regenerate_firmware_data`;\n//! do not edit \
+         (`firmware_viewpoints_are_fresh` checks it). The viewpoints the firmware\n//! walks: \
+         what the `.vcx` file cannot hold. Not formatted (`#[rustfmt::skip]` where it is\n//! \
+         declared).\n\n/// Viewpoints (raw query coordinates, 2⁻³²).\n\
+         pub static VIEWPOINTS: [(i64, i64); {}] = [",
         points.len()
     );
     for q in &points {
@@ -450,56 +301,82 @@ const fn c(f: u32, g: u32, b: u32, t: u32, l: u32, r: u32, ln: u32, rn: u32) -> 
     o
 }
 
-fn scene_data_path() -> std::path::PathBuf {
-    repo_path("firmware/src/scene_data.rs")
+/// Writes `firmware/hall.vcx` and `firmware/src/viewpoints.rs` (run by hand after the
+/// scene, the construction or the format changes).
+#[test]
+#[ignore = "writes firmware/hall.vcx and firmware/src/viewpoints.rs"]
+fn regenerate_firmware_data() {
+    std::fs::write(repo_path(FIRMWARE_VCX), generate_vcx()).expect("write");
+    std::fs::write(repo_path(FIRMWARE_VIEWPOINTS), generate_viewpoints()).expect("write");
 }
 
-/// Writes `firmware/src/scene_data.rs` (run by hand after the scene or the construction
-/// changes).
-#[test]
-#[ignore = "writes firmware/src/scene_data.rs"]
-fn regenerate_scene_data() {
-    std::fs::write(scene_data_path(), generate_scene_data()).expect("write");
-}
+const STALE: &str = "stale: run `cargo test -p vcx-tests --test no_alloc -- --ignored \
+                     regenerate_firmware_data`";
 
-/// The checked-in firmware data is what a fresh build of the scene file produces.
+/// The checked-in `.vcx` file is what a fresh build of the scene file writes, and it is
+/// the file the firmware embeds.
 #[test]
-fn scene_data_is_fresh() {
+fn firmware_vcx_is_fresh() {
     let _g = lock();
-    let want = generate_scene_data();
-    let got = std::fs::read_to_string(scene_data_path()).expect("read");
+    let want = generate_vcx();
+    let got = std::fs::read(repo_path(FIRMWARE_VCX)).expect("read");
+    assert!(got == want, "{FIRMWARE_VCX} is {STALE}");
+    assert!(app::VCX == want.as_slice(), "app.rs embeds another file");
+}
+
+/// The checked-in viewpoints are what the generator produces.
+#[test]
+fn firmware_viewpoints_are_fresh() {
+    let _g = lock();
+    let got = std::fs::read_to_string(repo_path(FIRMWARE_VIEWPOINTS)).expect("read");
     assert!(
-        got == want,
-        "firmware/src/scene_data.rs is stale: run `cargo test -p vcx-tests --test no_alloc \
-         -- --ignored regenerate_scene_data`"
+        got == generate_viewpoints(),
+        "{FIRMWARE_VIEWPOINTS} is {STALE}"
     );
 }
 
-/// The firmware's code path (`app::run` over the embedded statics, fixed-capacity scene,
-/// buffers in one `Ram` block) allocates nothing, and its views equal `walk::view` of the
-/// owned complex and the exact reference.
+/// The buffer sizes the firmware reads from the header at compile time are the file's
+/// counts, and every buffer is exactly as long as the file needs.
+#[test]
+fn firmware_capacities_are_the_header_counts() {
+    let h = vcx::format::Header::read(app::VCX).expect("header");
+    let counts = [h.objects, h.scene_vertices, h.complex_vertices, h.cylinders];
+    let capacities = [
+        app::OBJECTS,
+        app::SCENE_VERTICES,
+        app::COMPLEX_VERTICES,
+        app::CYLINDERS,
+    ];
+    assert_eq!(counts.map(|c| c as usize), capacities);
+    assert!(
+        !h.has_history(),
+        "the firmware file is written without history"
+    );
+}
+
+/// The firmware's code path (`app::decode` of the embedded bytes into `app::Arenas`,
+/// `app::complex` into `app::Ram`, `app::views`) allocates nothing, decodes the same
+/// complex as the allocating `format::decode`, and its views equal `walk::view` of the
+/// owned complex built by the sweep and the exact reference.
 #[test]
 fn firmware_walk_matches_owned_view_and_reference() {
     let _g = lock();
-    let scene = app::scene().expect("embedded scene validates");
-    let s = scene.as_ref();
+    let mut arenas = Box::new(app::Arenas::new());
     let mut ram = Box::new(app::Ram::new());
     let mut out = app::out();
     // Results are copied into preallocated storage, so the callback allocates nothing.
-    let mut got: Vec<Vec<ViewInterval>> = (0..scene_data::VIEWPOINTS.len())
+    let mut got: Vec<Vec<ViewInterval>> = (0..viewpoints::VIEWPOINTS.len())
         .map(|_| Vec::with_capacity(app::CAPACITY))
         .collect();
-    // As `firmware/src/main.rs` does: rebuild the derived state, then walk the views.
+    // As `firmware/src/main.rs` does: decode and check the file, rebuild the derived
+    // state, walk the views.
     let (n, checksum) = allocations(|| {
         for g in got.iter_mut() {
             g.clear();
         }
-        let complex = app::complex(
-            &s,
-            &scene_data::VERTICES,
-            &scene_data::CYLINDER_DATA,
-            &mut ram,
-        )?;
+        let file = app::decode(app::VCX, &mut arenas)?;
+        let s = file.scene.as_ref();
+        let complex = app::complex(&s, file.vertices, file.cylinders, &mut ram)?;
         app::views(&complex, &s, &mut out, |k, view| {
             if let Some(g) = got.get_mut(k) {
                 g.extend_from_slice(view);
@@ -509,12 +386,22 @@ fn firmware_walk_matches_owned_view_and_reference() {
     assert_eq!(n, 0, "the firmware path allocated");
     checksum.expect("firmware run");
 
-    // The same views from the owned complex of the same scene, and from the reference.
+    // The allocating decoder reads the same scene and complex.
+    let loaded = vcx::format::decode(app::VCX).expect("decode");
+    let file = app::decode(app::VCX, &mut arenas).expect("decode_into");
+    let s = file.scene.as_ref();
+    assert_eq!(file.vertices, loaded.complex.vertices());
+    assert_eq!(file.cylinders, loaded.complex.cylinders());
+    let source = source_scene();
+    assert_eq!(s.objects(), source.as_ref().objects());
+    assert_eq!(s.vertices(), source.as_ref().vertices());
+
+    // The same views from the owned complex of the same scene (built by the other
+    // construction), and from the reference.
     let owned = build_by_sweep(&s).expect("build");
-    assert_eq!(owned.cylinders(), &scene_data::CYLINDER_DATA[..]);
     let all = SubScene::new(s, (0..s.len() as u32).map(vcx::ObjectId));
     let mut compared = 0;
-    for (k, &(x, y)) in scene_data::VIEWPOINTS.iter().enumerate() {
+    for (k, &(x, y)) in viewpoints::VIEWPOINTS.iter().enumerate() {
         let q = QueryPoint::from_raw(x, y).expect("in range");
         let want = view(&owned, &s, q).expect("owned view");
         assert_eq!(got[k].len(), want.len(), "viewpoint {k}");
@@ -527,7 +414,25 @@ fn firmware_walk_matches_owned_view_and_reference() {
         );
         compared += 1;
     }
-    assert_eq!(compared, FIRMWARE_VIEWPOINTS);
+    assert_eq!(compared, VIEWPOINT_COUNT);
+}
+
+/// A damaged embedded file is an `app::Error::Format` on the firmware path, not a panic.
+#[test]
+fn firmware_rejects_a_damaged_file() {
+    let _g = lock();
+    let mut arenas = Box::new(app::Arenas::new());
+    let mut bytes = app::VCX.to_vec();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    assert!(matches!(
+        app::decode(&bytes, &mut arenas),
+        Err(app::Error::Format(FormatError::Checksum { .. }))
+    ));
+    assert!(matches!(
+        app::decode(&bytes[..bytes.len() / 2], &mut arenas),
+        Err(app::Error::Format(_))
+    ));
 }
 
 /// The counter sees allocations (a positive control: otherwise the zero counts above would
@@ -536,23 +441,27 @@ fn firmware_walk_matches_owned_view_and_reference() {
 fn the_counter_sees_allocations() {
     use core::mem::size_of;
     let _g = lock();
-    let scene = app::scene().expect("embedded scene validates");
-    let s = scene.as_ref();
+    let mut arenas = Box::new(app::Arenas::new());
+    let file = app::decode(app::VCX, &mut arenas).expect("embedded file decodes");
+    let s = file.scene.as_ref();
     let owned = build_by_sweep(&s).expect("build");
-    let &(x, y) = scene_data::VIEWPOINTS.first().expect("a viewpoint");
+    let &(x, y) = viewpoints::VIEWPOINTS.first().expect("a viewpoint");
     let q = QueryPoint::from_raw(x, y).expect("in range");
     let (n, v) = allocations(|| view(&owned, &s, q));
     assert!(n > 0 && v.is_ok(), "the owned view allocates its Vec: {n}");
     println!(
-        "host sizes: ViewInterval {} B, Angle {} B, Cylinder {} B, Vertex {} B; firmware scene: \
-         {} objects, {} complex vertices, {} cylinders; derived state without angles {} B",
+        "host sizes: ViewInterval {} B, Angle {} B, Cylinder {} B, Vertex {} B; firmware file: \
+         {} bytes, {} objects, {} complex vertices, {} cylinders; decoded arenas {} B, derived \
+         state without angles {} B",
         size_of::<ViewInterval>(),
         size_of::<Angle>(),
         size_of::<Cylinder>(),
         size_of::<vcx::partition::Vertex>(),
-        scene_data::OBJECTS,
-        scene_data::COMPLEX_VERTICES,
-        scene_data::CYLINDERS,
+        app::VCX.len(),
+        app::OBJECTS,
+        app::COMPLEX_VERTICES,
+        app::CYLINDERS,
+        size_of::<app::Arenas>(),
         size_of::<app::Ram>(),
     );
 }

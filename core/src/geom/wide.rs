@@ -49,12 +49,14 @@ impl Wide {
         let k = (k < 0, k.unsigned_abs());
         let (k0, k1) = (k.1 as u64, (k.1 >> 64) as u64);
         let mut mag = [0u64; LIMBS];
+        // Limbs above the highest nonzero one contribute nothing.
+        let used = LIMBS - self.mag.iter().rev().take_while(|&&l| l == 0).count();
         for (shift, kl) in [(0, k0), (1, k1)] {
             if kl == 0 {
                 continue;
             }
             let mut carry: u128 = 0;
-            for i in 0..LIMBS {
+            for i in 0..used {
                 let acc = u128::from(self.mag[i]) * u128::from(kl) + carry;
                 match mag.get_mut(i + shift) {
                     Some(slot) => {
@@ -66,8 +68,17 @@ impl Wide {
                     None => carry = 0,
                 }
             }
-            if carry != 0 {
-                return None;
+            // The carry goes into the next limb, if there is one.
+            match mag.get_mut(used + shift) {
+                Some(slot) if carry != 0 => {
+                    let sum = u128::from(*slot) + carry;
+                    *slot = sum as u64;
+                    if sum >> 64 != 0 {
+                        return None;
+                    }
+                }
+                None if carry != 0 => return None,
+                _ => {}
             }
         }
         Some(Wide::new(self.negative != k.0, mag))
@@ -167,6 +178,37 @@ mod tests {
                 assert_eq!(w(a).mul_i128(b), Some(w(a * b)), "{a} * {b}");
                 assert_eq!(w(a).cmp(&w(b)), a.cmp(&b));
             }
+        }
+    }
+
+    /// Products of several limbs agree with the laws of arithmetic (pseudo-random factors
+    /// up to 2¹²⁷, so that carries cross limbs and the top limbs move).
+    #[test]
+    fn multi_limb_arithmetic_is_consistent() {
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let hi = i128::from(x >> 1) << 63;
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (hi | i128::from(x >> 1)) * if x & 1 == 0 { 1 } else { -1 }
+        };
+        for _ in 0..200 {
+            let (a, b, c, k1, k2) = (next(), next(), next(), next() >> 1, next() >> 1);
+            let ab = w(a).mul_i128(b).unwrap().mul_i128(c).unwrap();
+            let l = ab.mul_i128(k1).unwrap().mul_i128(k2).unwrap();
+            let r = ab.mul_i128(k2).unwrap().mul_i128(k1).unwrap();
+            assert_eq!(l, r);
+            let sum = ab.mul_i128(k1).unwrap().add(&ab.mul_i128(k2).unwrap());
+            assert_eq!(sum, ab.mul_i128(k1 + k2));
+            assert_eq!(
+                ab.mul_i128(k1).unwrap().sub(&ab.mul_i128(k1).unwrap()),
+                Some(w(0))
+            );
+            assert_eq!(ab.neg().mul_i128(-k1), ab.mul_i128(k1));
         }
     }
 

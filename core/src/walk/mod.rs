@@ -76,8 +76,8 @@ mod view;
 #[cfg(feature = "alloc")]
 pub use tree::{ray_tree, TreeInterval};
 #[cfg(feature = "alloc")]
-pub use view::view;
-pub use view::{view_capacity, view_into, ViewInterval};
+pub use view::{view, view_range};
+pub use view::{view_capacity, view_into, view_range_into, ViewInterval};
 
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;

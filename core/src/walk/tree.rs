@@ -1012,6 +1012,11 @@ impl Tree<'_, '_> {
                 });
             let hops = rule.hops.get(st..).unwrap_or(&[]);
             let best = match self.map_dir_exact(hops, rule.eye, rule.dir) {
+                // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
+                _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
+                    let w = diff(self.qpoint(v), eye);
+                    (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
+                }),
                 Some(d) => nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
                     let along = Wide::dot(d, w)?;

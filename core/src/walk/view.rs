@@ -5,6 +5,7 @@ use alloc::vec::Vec;
 use core::cmp::Ordering;
 
 use super::WalkError;
+use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
 use crate::partition::{Complex, Storage};
@@ -65,6 +66,78 @@ pub fn view_into<S: Storage>(
     let mut sink = SliceSink { out, len: 0 };
     sweep(complex, scene, q, &mut sink)?;
     Ok(sink.len)
+}
+
+/// The view from `q` restricted to the directions counter-clockwise from `from` to `to`
+/// (a field of view; `from == to` is the full circle starting at `from`), written into
+/// `out` like [`view_into`] (which needs [`view_capacity`] intervals, as this does):
+/// the first interval starts at `from` — its `start_vertex` is `None` unless a boundary
+/// of the full view lies exactly on `from` — and the others are the full view's boundaries
+/// strictly inside the range, in order from `from`; a boundary exactly on `to` is left
+/// out. Decided exactly (`Angle::cmp_exact`), so this is exactly the restriction of the
+/// full view.
+///
+/// Cost: the full walk (the walk starts at θ = 0, where the start cylinder is found without
+/// point location); starting at `from` needs point location in a history.
+pub fn view_range_into<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    from: Direction,
+    to: Direction,
+    out: &mut [ViewInterval],
+) -> Result<usize, WalkError> {
+    let n = view_into(complex, scene, q, out)?;
+    let view = out.get_mut(..n).unwrap_or_default();
+    let (f, t) = (Angle::constant(from), Angle::constant(to));
+    // Counter-clockwise order from `f`: (lap, angle), lap 1 for directions before `f`.
+    let lap = |a: &Angle| u8::from(a.cmp_exact(&f) == Ordering::Less);
+    let key_t = if t.cmp_exact(&f) == Ordering::Greater {
+        0
+    } else {
+        1
+    };
+    // The interval containing `f`: the last starting at or before it, else the last one
+    // (it wraps through θ = 0).
+    let k = view
+        .iter()
+        .rposition(|i| i.start.cmp_exact(&f) != Ordering::Greater)
+        .unwrap_or(n.saturating_sub(1));
+    view.rotate_left(k);
+    if let Some(first) = view.first_mut() {
+        if n == 1 || first.start.cmp_exact(&f) != Ordering::Equal {
+            first.start = f;
+            first.start_vertex = None;
+        }
+    }
+    let inside = |i: &ViewInterval| {
+        let l = lap(&i.start);
+        l < key_t || (l == key_t && i.start.cmp_exact(&t) == Ordering::Less)
+    };
+    let m = 1 + view.iter().skip(1).take_while(|i| inside(i)).count();
+    Ok(m.min(n))
+}
+
+/// [`view_range_into`] into a new vector.
+#[cfg(feature = "alloc")]
+pub fn view_range<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    from: Direction,
+    to: Direction,
+) -> Result<Vec<ViewInterval>, WalkError> {
+    let mut out = alloc::vec![
+        ViewInterval {
+            start: Angle::ZERO,
+            object: None,
+            start_vertex: None,
+        };
+        view_capacity(scene.len())
+    ];
+    let n = view_range_into(complex, scene, q, from, to, &mut out)?;
+    out.truncate(n);
+    Ok(out)
 }
 
 /// Where [`sweep`] puts the intervals.

@@ -10,13 +10,17 @@
 //!   full 360° view from each point (screens left out, complex built once by the sweep),
 //!   or with `--depth D` the ray tree (screens kept): median microseconds per view (each
 //!   point timed as the best of R repetitions), views per second, mean events of the
-//!   primary walk (cylinders entered) and intervals per view. One JSON object.
+//!   primary walk (cylinders entered) and intervals per view. One JSON object. With
+//!   `--fov DEG [--heading DEG] [--width W]` each measurement is a frame of W columns: the
+//!   same sweep plus per-column hits (`render::centre_intervals`, `render::hit_along`) and
+//!   exact per-column coverage (`render::coverage`); adds `us_per_frame`.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::json;
 use vcx::partition::{build_by_sweep, BuildOptions, Complex, Cylinder, History};
+use vcx::render::{centre_intervals, coverage, hit_along, Camera, Interval};
 use vcx::{Material, ObjectId, QueryPoint, SubScene};
 
 use super::{write_stdout, Failure};
@@ -85,6 +89,17 @@ pub struct ViewsArgs {
     /// Ray-tree depth (0: the direct view).
     #[arg(long, default_value_t = 0)]
     pub depth: usize,
+    /// With `--fov`: time a frame instead of a full view — the sweep plus per-column hits
+    /// (the interval through each column's centre and its distance) and the exact
+    /// per-column coverage — looking along `--heading` (degrees).
+    #[arg(long, default_value_t = 0.0)]
+    pub heading: f64,
+    /// Horizontal field of view of a frame, in degrees (below 180).
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// Columns of a frame.
+    #[arg(long, default_value_t = 800)]
+    pub width: usize,
 }
 
 /// Runs a benchmark.
@@ -207,15 +222,23 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         if vcx::partition::point_in_scene(&full, q).is_some() {
             continue;
         }
-        let count = || -> Result<usize, Failure> {
+        let camera = match a.fov {
+            Some(fov) => Some(
+                Camera::new(q, a.heading.to_radians(), fov.to_radians(), a.width)
+                    .map_err(|e| Failure::bad_input(format!("--heading/--fov/--width: {e}")))?,
+            ),
+            None => None,
+        };
+        let mut columns = vec![0usize; a.width];
+        let mut count = || -> Result<usize, Failure> {
             Ok(if a.depth == 0 {
-                vcx::walk::view(&complex, &scene, q)
-                    .map_err(internal)?
-                    .len()
+                let v = vcx::walk::view(&complex, &scene, q).map_err(internal)?;
+                frame(&scene, camera.as_ref(), &v, &mut columns);
+                v.len()
             } else {
-                vcx::walk::ray_tree(&complex, &scene, q, a.depth)
-                    .map_err(internal)?
-                    .len()
+                let t = vcx::walk::ray_tree(&complex, &scene, q, a.depth).map_err(internal)?;
+                frame(&scene, camera.as_ref(), &t, &mut columns);
+                t.len()
             })
         };
         let mut best = f64::INFINITY;
@@ -237,7 +260,7 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
     }
     times.sort_by(f64::total_cmp);
     let median = times[times.len() / 2];
-    let line = json!({
+    let mut line = json!({
         "scene": a.scene.display().to_string(),
         "objects": scene.len(),
         "depth": a.depth,
@@ -248,7 +271,36 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         "events_per_view": events as f64 / used as f64,
         "intervals_per_view": boundaries as f64 / used as f64,
     });
+    if let Some(fov) = a.fov {
+        // Each "view" is a frame: sweep, per-column hits and exact coverage.
+        line["frame"] = json!({ "heading": a.heading, "fov": fov, "width": a.width });
+        line["us_per_frame"] = json!(median * 1e6);
+        line["frames_per_second"] = json!(1.0 / median);
+    }
     write_stdout(&format!("{line}\n"))
+}
+
+/// The per-column work of a frame after the sweep (nothing without a camera): the interval
+/// through each column's centre and the distance along its branch, and the exact coverage
+/// of every column (summed, so that nothing is optimised away).
+fn frame<I: Interval>(
+    scene: &vcx::SceneRef<'_>,
+    camera: Option<&Camera>,
+    intervals: &[I],
+    columns: &mut [usize],
+) {
+    let Some(camera) = camera else { return };
+    centre_intervals(camera, intervals, columns);
+    let mut sum = 0.0;
+    for (c, &k) in columns.iter().enumerate() {
+        let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
+        let d = camera.centre(c).direction();
+        if let Some(hit) = hit_along(scene, camera.eye(), d, branch) {
+            sum += hit.length;
+        }
+    }
+    coverage(camera, intervals, |p| sum += p.fraction);
+    core::hint::black_box(sum);
 }
 
 /// `k` free points drawn uniformly in the bounding box (a portable xorshift, seeded).

@@ -1,0 +1,187 @@
+//! A field of view (`walk::view_range`) is exactly the restriction of the full-circle view:
+//! checked against the exact reference's full view restricted here in big rationals, with
+//! range ends at random directions, at the directions of scene vertices (boundaries, and
+//! directions exactly along them that are not boundaries), at θ = 0 and the full circle
+//! (`from == to`).
+
+use num_traits::{Signed, Zero};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use vcx::geom::predicates::Direction;
+use vcx::partition::build_by_sweep;
+use vcx::walk::view_range;
+use vcx::{Material, ObjectId, QueryPoint, SubScene};
+use vcx_demo::generate::{generate, SceneKind};
+use vcx_tests::reference::{self, Vec2};
+
+fn long() -> bool {
+    std::env::var_os("VCX_LONG").is_some()
+}
+
+fn vec2(d: Direction) -> Vec2 {
+    Vec2::from_i64(d.x, d.y)
+}
+
+/// Counter-clockwise order on `[0, 2π)` from +x.
+fn angle_cmp(a: &Vec2, b: &Vec2) -> core::cmp::Ordering {
+    let upper = |v: &Vec2| v.y.is_positive() || (v.y.is_zero() && v.x.is_positive());
+    match (upper(a), upper(b)) {
+        (true, false) => core::cmp::Ordering::Less,
+        (false, true) => core::cmp::Ordering::Greater,
+        _ => {
+            let c = a.cross(b);
+            if c.is_positive() {
+                core::cmp::Ordering::Less
+            } else if c.is_zero() {
+                core::cmp::Ordering::Equal
+            } else {
+                core::cmp::Ordering::Greater
+            }
+        }
+    }
+}
+
+/// The reference's full view restricted to `(from, to)`: (start, object, vertex).
+type Row = (Vec2, Option<ObjectId>, Option<(u32, usize)>);
+
+fn restrict(full: &[reference::Interval<Option<ObjectId>>], from: &Vec2, to: &Vec2) -> Vec<Row> {
+    use core::cmp::Ordering::*;
+    let lap = |a: &Vec2| u8::from(angle_cmp(a, from) == Less);
+    let lap_to = if angle_cmp(to, from) == Greater { 0 } else { 1 };
+    let n = full.len();
+    // Boundaries: every start when there is more than one interval.
+    let k = if n == 1 {
+        0
+    } else {
+        full.iter()
+            .rposition(|i| angle_cmp(&i.start, from) != Greater)
+            .unwrap_or(n - 1)
+    };
+    let first = &full[k];
+    let on_from = n > 1 && angle_cmp(&first.start, from) == Equal;
+    let mut rows = vec![(
+        from.clone(),
+        first.value,
+        if on_from {
+            first.start_vertex.map(|v| (v.object.0, v.vertex))
+        } else {
+            None
+        },
+    )];
+    for j in 1..n {
+        let i = &full[(k + j) % n];
+        let l = lap(&i.start);
+        if !(l < lap_to || (l == lap_to && angle_cmp(&i.start, to) == Less)) {
+            break;
+        }
+        rows.push((
+            i.start.clone(),
+            i.value,
+            i.start_vertex.map(|v| (v.object.0, v.vertex)),
+        ));
+    }
+    rows
+}
+
+fn written(s: &vcx::SceneRef<'_>, k: usize) -> (u32, usize) {
+    for (i, o) in s.objects().iter().enumerate() {
+        if (o.first_vertex()..o.first_vertex() + o.len()).contains(&k) {
+            return (i as u32, o.written_vertex_id(k - o.first_vertex()));
+        }
+    }
+    panic!("vertex {k} out of range")
+}
+
+fn same_direction(v: (i128, i128), r: &Vec2) -> bool {
+    let d = Vec2::from_i64(v.0 as i64, v.1 as i64);
+    d.cross(r).is_zero() && d.dot(r).is_positive()
+}
+
+#[test]
+fn field_of_view_is_the_restriction_of_the_full_view() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut compared = 0;
+    let per_scene = if long() { 400 } else { 30 };
+    for (kind, n, seed) in [
+        (SceneKind::Grid, 16, 1),
+        (SceneKind::Grid, 64, 2),
+        (SceneKind::Mixed, 12, 3),
+        (SceneKind::Hall, 6, 4),
+    ] {
+        let file = generate(kind, n, seed).unwrap();
+        let s = file.scene.as_ref();
+        let keep = s
+            .objects()
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.material != Material::Screen)
+            .map(|(i, _)| ObjectId(i as u32));
+        let sub = SubScene::new(s, keep);
+        let sr = sub.as_ref();
+        let c = build_by_sweep(&sr).unwrap();
+        let verts = s.vertices();
+        let (lo, hi) = verts.iter().fold(
+            ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
+            |(lo, hi), p| {
+                (
+                    (lo.0.min(p.x()), lo.1.min(p.y())),
+                    (hi.0.max(p.x()), hi.1.max(p.y())),
+                )
+            },
+        );
+        for k in 0..per_scene {
+            let q = if k % 2 == 0 {
+                QueryPoint::from_raw(
+                    i64::from(rng.gen_range(lo.0..=hi.0)) << 16,
+                    i64::from(rng.gen_range(lo.1..=hi.1)) << 16,
+                )
+            } else {
+                // On the line through two vertices: boundaries through several vertices.
+                let (a, b) = (
+                    verts[rng.gen_range(0..verts.len())],
+                    verts[rng.gen_range(0..verts.len())],
+                );
+                let t = rng.gen_range(-2i64..=3);
+                QueryPoint::from_raw(
+                    (i64::from(a.x()) + t * (i64::from(b.x()) - i64::from(a.x()))) << 16,
+                    (i64::from(a.y()) + t * (i64::from(b.y()) - i64::from(a.y()))) << 16,
+                )
+            };
+            let Some(q) = q else { continue };
+            let Ok(full) = reference::view(s, &Vec2::from_query(q)) else {
+                continue;
+            };
+            // Range ends: random, toward a vertex (often a boundary), +x, equal ends.
+            let toward = |rng: &mut ChaCha8Rng| {
+                let v = verts[rng.gen_range(0..verts.len())].to_query();
+                Direction::new(v.x() - q.x(), v.y() - q.y())
+            };
+            for r in 0..6 {
+                let pick = |rng: &mut ChaCha8Rng| match rng.gen_range(0..4) {
+                    0 => Direction::new(rng.gen_range(-9..=9), rng.gen_range(-9..=9)),
+                    1 | 2 => toward(rng),
+                    _ => Direction::new(1, 0),
+                };
+                let (Some(from), Some(to)) = (pick(&mut rng), pick(&mut rng)) else {
+                    continue;
+                };
+                let to = if r == 0 { from } else { to };
+                let want = restrict(&full, &vec2(from), &vec2(to));
+                let got = view_range(&c, &sr, q, from, to).unwrap();
+                let show = || {
+                    format!(
+                        "{kind:?} q {q:?} from {from:?} to {to:?}\n core {got:#?}\n want {want:#?}"
+                    )
+                };
+                assert_eq!(got.len(), want.len(), "{}", show());
+                for (g, w) in got.iter().zip(&want) {
+                    assert_eq!(g.object.and_then(|o| sub.original(o)), w.1, "{}", show());
+                    assert!(same_direction(g.start.vector(), &w.0), "{}", show());
+                    assert_eq!(g.start_vertex.map(|k| written(&s, k)), w.2, "{}", show());
+                }
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 500, "{compared}");
+}
