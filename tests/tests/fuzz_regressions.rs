@@ -38,6 +38,7 @@ const RUST_INPUTS: &[(&str, &str)] = &[
     ("ray_tree", "no_start_far_eye_depth2.rs"),
     ("ray_tree", "boundary_vertex_mirror_corner.rs"),
     ("ray_tree", "thin_interval_below_2pi.rs"),
+    ("ray_tree", "spurious_sliver_diagonal.rs"),
 ];
 
 fn dir(target: &str) -> PathBuf {
@@ -223,6 +224,13 @@ fn ray_tree_boundary_vertex_mirror_corner() {
 fn ray_tree_thin_interval_below_2pi() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/thin_interval_below_2pi.rs");
+    assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
+}
+
+#[test]
+fn ray_tree_spurious_sliver_diagonal() {
+    let input: RayTreeInput =
+        include!("../../fuzz/regressions/ray_tree/spurious_sliver_diagonal.rs");
     assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
 }
 

@@ -55,6 +55,51 @@ pub struct TreeInterval {
 struct Dir {
     angle: Angle,
     vertex: Option<(usize, bool)>,
+    /// For an end placed in `f64` through a hop ([`Tree::map_end`]; `angle` is then
+    /// rounded): the exact direction, so that events and vertices exactly on it are
+    /// classified exactly (a vertex exactly on a mapped range end is a frequent
+    /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`). `None` past `Wide`'s
+    /// budget.
+    exact: Option<(Wide, Wide)>,
+}
+
+impl Dir {
+    fn vertex(angle: Angle, vertex: usize, ahead: bool) -> Dir {
+        Dir {
+            angle,
+            vertex: Some((vertex, ahead)),
+            exact: None,
+        }
+    }
+
+    /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
+    /// direction (within a half turn), exactly.
+    fn turn(&self, v: (i128, i128)) -> Sign {
+        match self.exact.and_then(|x| Wide::cross(x, v)) {
+            Some(c) => c.sign(),
+            None => Sign::of_i128(cross(self.angle.vector(), v)),
+        }
+    }
+
+    /// Where the event direction `a`, met by a walk of a range, lies against this range
+    /// end: `Equal` exactly on it, `Less` before it, `Greater` after it (the walk's range is
+    /// less than a half turn, so the side of the line decides). Without an exact
+    /// direction only `Equal` is decided (`inside` otherwise: the walk itself orders
+    /// events against an exact end).
+    fn place(&self, a: &Angle, inside: Ordering) -> Ordering {
+        if self.exact.is_none() {
+            return if a.cmp_exact(&self.angle) == Ordering::Equal {
+                Ordering::Equal
+            } else {
+                inside
+            };
+        }
+        match self.turn(a.vector()) {
+            Sign::Positive => Ordering::Greater,
+            Sign::Zero => Ordering::Equal,
+            Sign::Negative => Ordering::Less,
+        }
+    }
 }
 
 /// How the vertex of a boundary is found once the branches on both sides are known (the
@@ -194,10 +239,7 @@ impl Tree<'_, '_> {
     }
 
     fn toward(&self, eye: QueryPoint, v: usize) -> Dir {
-        Dir {
-            angle: Angle::from_query(eye, ranked(self.scene, v)),
-            vertex: Some((v, true)),
-        }
+        Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v, true)
     }
 
     /// The primary pieces from a full walk, or the object seen all around if the view has
@@ -210,13 +252,9 @@ impl Tree<'_, '_> {
             let ceiling = self.complex.ceiling(s.cylinder);
             match (first, s.vertex) {
                 (None, _) => first = Some(ceiling),
-                (Some(_), Some(v)) if s.ahead => events.push((
-                    Dir {
-                        angle: s.angle,
-                        vertex: Some((v, true)),
-                    },
-                    ceiling,
-                )),
+                (Some(_), Some(v)) if s.ahead => {
+                    events.push((Dir::vertex(s.angle, v, true), ceiling))
+                }
                 _ => {}
             }
         })?;
@@ -387,9 +425,25 @@ impl Tree<'_, '_> {
             return Err(WalkError::Corrupt);
         }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
+        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`.
+        let exact = (|| {
+            let d = end
+                .exact
+                .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
+            let den = Wide::cross(d, e)?;
+            let num = cross(diff(a, hop.prev), e);
+            let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
+            let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
+            match den.sign() {
+                Sign::Negative => Some((x.neg(), y.neg())),
+                Sign::Zero => None,
+                Sign::Positive => Some((x, y)),
+            }
+        })();
         Ok(Dir {
             angle: Angle::constant(dir),
             vertex: None,
+            exact,
         })
     }
 
@@ -631,10 +685,7 @@ impl Tree<'_, '_> {
             &mut |s| {
                 if let Some(v) = s.vertex {
                     events.push((
-                        Dir {
-                            angle: s.angle,
-                            vertex: Some((v, s.ahead)),
-                        },
+                        Dir::vertex(s.angle, v, s.ahead),
                         self.complex.ceiling(s.cylinder),
                     ));
                 }
@@ -652,16 +703,25 @@ impl Tree<'_, '_> {
                 j += 1;
             }
             let d = events[i].0;
-            if d.angle.cmp_exact(&to.angle) == Ordering::Equal {
+            match to.place(&d.angle, Ordering::Less) {
                 // On the closing ray: not inside the open range.
-                end = d;
-                break;
+                Ordering::Equal => {
+                    end = d;
+                    break;
+                }
+                // Past the exact end, before the rounded one.
+                Ordering::Greater => break,
+                Ordering::Less => {}
             }
             let after = events[j - 1].1;
-            if d.angle.cmp_exact(&from.angle) == Ordering::Equal {
-                // On the opening ray: part of the state at the start.
+            let opening = from.place(&d.angle, Ordering::Greater);
+            if opening != Ordering::Greater {
+                // On the opening ray (or before the exact start, after the rounded one):
+                // part of the state at the start.
                 seen = after;
-                cur_from = events[j - 1].0;
+                if opening == Ordering::Equal {
+                    cur_from = events[j - 1].0;
+                }
             } else if after != seen {
                 pieces.push(Piece {
                     from: cur_from,
@@ -717,17 +777,24 @@ impl Tree<'_, '_> {
                 _ => continue,
             };
             let (v0, v1) = (diff(self.qpoint(s0), eye), diff(self.qpoint(s1), eye));
-            let (start, boundary, sv) = if cross(lv, v0) > 0 {
-                (self.toward(eye, s0), self.split_boundary(eye, s0), v0)
+            // Against the range ends exactly (`Dir::turn`).
+            let (start, boundary, sv) = if lo.turn(v0) == Sign::Positive {
+                (self.toward(eye, s0), self.split_boundary(eye, s0), Some(v0))
             } else {
-                (*lo, first.clone(), lv)
+                (*lo, first.clone(), None)
             };
-            let (end, ev) = if cross(v1, hv) > 0 {
-                (self.toward(eye, s1), v1)
+            let (end, ev) = if hi.turn(v1) == Sign::Negative {
+                (self.toward(eye, s1), Some(v1))
             } else {
-                (*hi, hv)
+                (*hi, None)
             };
-            if cross(sv, ev) > 0 {
+            let nonempty = match (sv, ev) {
+                (Some(a), Some(b)) => cross(a, b) > 0,
+                (None, Some(b)) => lo.turn(b) == Sign::Positive,
+                (Some(a), None) => hi.turn(a) == Sign::Negative,
+                (None, None) => cross(lv, hv) > 0,
+            };
+            if nonempty {
                 out.push((start, end, boundary, (ia, ib)));
             }
         }
