@@ -121,6 +121,14 @@ fn seeded_builds_are_canonical() {
         );
         let st = h.stats();
         println!("seed {seed}: {st:?}");
+        // The cylinders at θ = 0 come first, so that a walk's start scan stops there.
+        let c = h.complex(&s).unwrap();
+        let zero = |c: &vcx::partition::Cylinder| c.left == vcx::partition::Wall::Zero;
+        let k = c.cylinders().iter().take_while(|c| zero(c)).count();
+        assert!(
+            k > 0 && c.cylinders()[k..].iter().all(|c| !zero(c)),
+            "seed {seed}"
+        );
     }
 }
 

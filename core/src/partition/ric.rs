@@ -527,15 +527,21 @@ impl History {
     /// The live partition as a complex (cylinders and vertices renumbered).
     pub fn complex(&self, scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         const NONE: u32 = u32::MAX;
+        // Live cylinders in node order, those at θ = 0 first (as the sweep creates them):
+        // a walk's start scan (`Complex::walk_trace`) then stops within them.
         let mut cmap = alloc::vec![NONE; self.cylinders.len()];
         let mut count = 0usize;
-        for (i, m) in cmap.iter_mut().enumerate() {
-            if self.alive[i] {
-                *m = u32::try_from(count)
-                    .ok()
-                    .filter(|&k| k != NONE)
-                    .ok_or(ComplexError::TooLarge)?;
-                count += 1;
+        for zero in [true, false] {
+            for (i, m) in cmap.iter_mut().enumerate() {
+                let live = self.alive.get(i) == Some(&true);
+                let at_zero = self.cylinders.get(i).is_some_and(|c| c.left == Wall::Zero);
+                if live && at_zero == zero {
+                    *m = u32::try_from(count)
+                        .ok()
+                        .filter(|&k| k != NONE)
+                        .ok_or(ComplexError::TooLarge)?;
+                    count += 1;
+                }
             }
         }
         let mut vmap = alloc::vec![NONE; self.vertices.len()];
@@ -571,18 +577,18 @@ impl History {
             Some(&k) if k != NONE => Some(CylinderId(k)),
             _ => None,
         };
-        let mut cylinders = Vec::with_capacity(count);
+        let mut cylinders = alloc::vec![Cylinder::new(Shape::default(), Wall::Zero); count];
         for (i, c) in self.cylinders.iter().enumerate() {
-            if !self.alive[i] {
+            let Some(slot) = cmap.get(i).and_then(|&k| cylinders.get_mut(k as usize)) else {
                 continue;
-            }
-            cylinders.push(Cylinder {
+            };
+            *slot = Cylinder {
                 left: wall(c.left),
                 right: wall(c.right),
                 left_neighbour: cyl(c.left_neighbour),
                 right_neighbour: cyl(c.right_neighbour),
                 ..*c
-            });
+            };
         }
         let mut complex = Complex {
             vertices,

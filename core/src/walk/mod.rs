@@ -188,7 +188,10 @@ impl<S: Storage> Complex<S> {
     /// Walks the trace of the free point `q` once around, from θ = 0, calling `step` for
     /// every cylinder entered (the first call is the start cylinder, with `vertex: None`).
     /// Allocates nothing; every iteration enters a new cylinder, and the walk is bounded by
-    /// four times the number of cylinders.
+    /// four times the number of cylinders. The start cylinder is found among the cylinders
+    /// at θ = 0 (left wall [`Wall::Zero`]) in arena order: both constructions number those
+    /// first (the sweep creates them first, `History::complex` puts them first), so the
+    /// scan stops within them — O(cylinders at θ = 0), about 3n for the grid scenes.
     pub fn walk_trace(
         &self,
         scene: &SceneRef<'_>,
