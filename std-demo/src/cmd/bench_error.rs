@@ -24,6 +24,9 @@
 //! the most samples that are not slower than the complex). Output: a table, or one JSON
 //! object with `--json`; `--svg FILE` also plots the curves (log–log, the complex as a
 //! vertical line at its time: its error is 0).
+//!
+//! The measurement itself is [`measure`] (typed results, [`versus`] for the comparisons),
+//! shared with the "error" section of `vcx bench figures`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -73,6 +76,54 @@ pub struct Args {
     /// Also plot the curves (time per frame against error, log–log) into this SVG file.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
+}
+
+impl Args {
+    /// The measurement's parameters.
+    fn params(&self) -> Params {
+        Params {
+            depth: self.depth,
+            width: self.width,
+            samples: self.samples.clone(),
+            frames: self.frames,
+            fov: self.fov,
+            seed: self.seed,
+            repeat: self.repeat,
+        }
+    }
+}
+
+/// What [`measure`] measures: the options of [`Args`] without the scene and the output.
+#[derive(Clone, Debug)]
+pub(crate) struct Params {
+    /// Ray-tree depth (0 to 16).
+    pub depth: usize,
+    /// Columns per frame.
+    pub width: usize,
+    /// Samples per column for the ray casters (1 to 65536 each).
+    pub samples: Vec<usize>,
+    /// Frames along the trajectory.
+    pub frames: usize,
+    /// Horizontal field of view in degrees.
+    pub fov: f64,
+    /// Seed of the trajectory.
+    pub seed: u64,
+    /// Repetitions per frame and method; the best is kept.
+    pub repeat: u32,
+}
+
+impl Params {
+    fn check(&self) -> Result<(), Failure> {
+        if self.samples.is_empty() || self.samples.iter().any(|&s| s == 0 || s > 1 << 16) {
+            return Err(Failure::bad_input(
+                "--samples: whole numbers from 1 to 65536",
+            ));
+        }
+        if self.depth > 16 {
+            return Err(Failure::bad_input("--depth: 0 to 16"));
+        }
+        Ok(())
+    }
 }
 
 fn internal(e: impl core::fmt::Display) -> Failure {
@@ -168,11 +219,15 @@ fn trajectory(scene: &SceneRef<'_>, n: usize, seed: u64) -> Vec<(QueryPoint, f64
 
 /// One point of a caster's curve.
 #[derive(Clone, Copy, Debug)]
-struct Point {
-    samples: usize,
-    seconds: f64,
-    error: f64,
-    wrong: f64,
+pub(crate) struct Point {
+    /// Rays per column.
+    pub samples: usize,
+    /// Seconds per frame (median over the frames of each frame's best run).
+    pub seconds: f64,
+    /// Mean absolute coverage error per column, in `[0, 1]`.
+    pub error: f64,
+    /// Share of columns whose dominant branch is wrong, in `[0, 1]`.
+    pub wrong: f64,
 }
 
 fn curve<C: Caster>(
@@ -180,7 +235,7 @@ fn curve<C: Caster>(
     caster: &C,
     cameras: &[Camera],
     exact: &[CoverageTable],
-    a: &Args,
+    a: &Params,
 ) -> Vec<Point> {
     let (mut table, mut scratch) = (CoverageTable::new(), CoverageTable::new());
     a.samples
@@ -226,35 +281,61 @@ fn curve<C: Caster>(
         .collect()
 }
 
+/// The error limits of the speed-up at equal error: name (in the JSON keys) and limit.
+pub(crate) const LIMITS: [(&str, f64); 3] =
+    [("1pct", 0.01), ("0.1pct", 0.001), ("0.01pct", 0.0001)];
+
+/// One caster against the complex.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Versus {
+    /// Per limit of [`LIMITS`]: the fewest samples whose error is within it, if any.
+    pub at: [Option<Point>; 3],
+    /// The caster's time over the complex's, at each limit; without any point within it,
+    /// the ratio for the most samples measured (a lower bound), flagged `true`.
+    pub speedup: [Option<(f64, bool)>; 3],
+    /// The most samples that are not slower than the complex.
+    pub equal_time: Option<Point>,
+}
+
 /// Speed-up at equal error (≤ 1 %, and the stricter 0.1 % and 0.01 %) and error at equal
 /// time, for one caster.
-fn compare(points: &[Point], complex_seconds: f64) -> Value {
-    let at = |limit: f64| points.iter().find(|p| p.error <= limit);
+pub(crate) fn versus(points: &[Point], complex_seconds: f64) -> Versus {
+    let best = points.last();
+    let at = LIMITS.map(|(_, limit)| points.iter().find(|p| p.error <= limit).copied());
+    let speedup = at.map(|p| match p {
+        Some(p) => Some((p.seconds / complex_seconds, false)),
+        None => best.map(|b| (b.seconds / complex_seconds, true)),
+    });
     let equal_time = points
         .iter()
         .filter(|p| p.seconds <= complex_seconds)
-        .max_by_key(|p| p.samples);
-    let best = points.last();
+        .max_by_key(|p| p.samples)
+        .copied();
+    Versus {
+        at,
+        speedup,
+        equal_time,
+    }
+}
+
+fn compare(points: &[Point], complex_seconds: f64) -> Value {
+    let v = versus(points, complex_seconds);
     let mut out = serde_json::Map::new();
-    for (name, limit) in [("1pct", 0.01), ("0.1pct", 0.001), ("0.01pct", 0.0001)] {
-        let p = at(limit);
+    for (((name, _), p), s) in LIMITS.iter().zip(v.at).zip(v.speedup) {
         out.insert(format!("samples_for_{name}"), json!(p.map(|p| p.samples)));
         // The complex's speed-up: the caster's time at that error over the complex's.
         out.insert(
             format!("speedup_at_{name}"),
-            json!(p.map(|p| p.seconds / complex_seconds)),
+            json!(s.filter(|s| !s.1).map(|s| s.0)),
         );
         // Without any point at that error: the ratio for the most samples measured, a
         // lower bound of the speed-up.
         out.insert(
             format!("speedup_lower_bound_{name}"),
-            json!(if p.is_none() {
-                best.map(|p| p.seconds / complex_seconds)
-            } else {
-                None
-            }),
+            json!(s.filter(|s| s.1).map(|s| s.0)),
         );
     }
+    let equal_time = v.equal_time;
     out.insert(
         "samples_at_equal_time".into(),
         json!(equal_time.map(|p| p.samples)),
@@ -286,18 +367,32 @@ fn points_json(points: &[Point]) -> Value {
     )
 }
 
-/// Runs `vcx bench error`.
-pub fn run(a: &Args) -> Result<(), Failure> {
-    if a.samples.is_empty() || a.samples.iter().any(|&s| s == 0 || s > 1 << 16) {
-        return Err(Failure::bad_input(
-            "--samples: whole numbers from 1 to 65536",
-        ));
-    }
-    if a.depth > 16 {
-        return Err(Failure::bad_input("--depth: 0 to 16"));
-    }
-    let file = super::check::load(&a.scene)?;
-    let scene = file.scene.as_ref();
+/// What [`measure`] returns: the complex's time and each caster's curve.
+pub(crate) struct Measured {
+    /// Objects in the scene.
+    pub objects: usize,
+    /// Frames measured (viewpoints whose ray tree succeeded).
+    pub frames: usize,
+    /// Mean intervals of the ray tree per frame.
+    pub intervals: f64,
+    /// Nodes of the quadtree.
+    pub quadtree_nodes: usize,
+    /// The complex's seconds per frame: ray tree and exact coverage.
+    pub complex_seconds: f64,
+    /// The ray tree alone.
+    pub tree_seconds: f64,
+    /// The exact coverage alone.
+    pub cover_seconds: f64,
+    /// The quadtree's curve, one point per samples count.
+    pub quadtree: Vec<Point>,
+    /// The BVH's curve.
+    pub bvh: Vec<Point>,
+}
+
+/// Measures the complex and both casters on `scene` (the module documentation).
+pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Failure> {
+    a.check()?;
+    let scene = *scene;
     let complex = build_by_sweep(&scene).map_err(internal)?;
     let prepared = Prepared::new(&scene);
     let quadtree = Quadtree::new(&prepared);
@@ -339,32 +434,49 @@ pub fn run(a: &Args) -> Result<(), Failure> {
             "no viewpoint along the trajectory could be rendered",
         ));
     }
-    let complex_seconds = median(&mut times);
-    let qt = curve(&prepared, &quadtree, &used, &exact, a);
-    let bv = curve(&prepared, &bvh, &used, &exact, a);
+    Ok(Measured {
+        objects: scene.len(),
+        frames: used.len(),
+        intervals: intervals as f64 / used.len() as f64,
+        quadtree_nodes: quadtree.nodes(),
+        complex_seconds: median(&mut times),
+        tree_seconds: median(&mut tree_times),
+        cover_seconds: median(&mut cover_times),
+        quadtree: curve(&prepared, &quadtree, &used, &exact, a),
+        bvh: curve(&prepared, &bvh, &used, &exact, a),
+    })
+}
+
+/// Runs `vcx bench error`.
+pub fn run(a: &Args) -> Result<(), Failure> {
+    let params = a.params();
+    params.check()?;
+    let file = super::check::load(&a.scene)?;
+    let m = measure(&file.scene.as_ref(), &params)?;
+    let (complex_seconds, qt, bv) = (m.complex_seconds, &m.quadtree, &m.bvh);
     let out = json!({
         "scene": a.scene.display().to_string(),
-        "objects": scene.len(),
+        "objects": m.objects,
         "depth": a.depth,
         "width": a.width,
         "fov_deg": a.fov,
-        "frames": used.len(),
-        "intervals_per_frame": intervals as f64 / used.len() as f64,
-        "quadtree_nodes": quadtree.nodes(),
+        "frames": m.frames,
+        "intervals_per_frame": m.intervals,
+        "quadtree_nodes": m.quadtree_nodes,
         "complex": {
             "us_per_frame": complex_seconds * 1e6,
-            "us_ray_tree": median(&mut tree_times) * 1e6,
-            "us_coverage": median(&mut cover_times) * 1e6,
+            "us_ray_tree": m.tree_seconds * 1e6,
+            "us_coverage": m.cover_seconds * 1e6,
             "mean_abs_error": 0.0,
             "wrong_dominant": 0.0,
         },
-        "quadtree": points_json(&qt),
-        "bvh": points_json(&bv),
-        "quadtree_vs_complex": compare(&qt, complex_seconds),
-        "bvh_vs_complex": compare(&bv, complex_seconds),
+        "quadtree": points_json(qt),
+        "bvh": points_json(bv),
+        "quadtree_vs_complex": compare(qt, complex_seconds),
+        "bvh_vs_complex": compare(bv, complex_seconds),
     });
     if let Some(path) = &a.svg {
-        let svg = plot(&a.scene.display().to_string(), complex_seconds, &qt, &bv);
+        let svg = plot(&a.scene.display().to_string(), complex_seconds, qt, bv);
         std::fs::write(path, svg)
             .map_err(|e| Failure::bad_input(format!("{}: cannot write: {e}", path.display())))?;
     }
@@ -376,11 +488,11 @@ pub fn run(a: &Args) -> Result<(), Failure> {
          complex: {:.1} µs per frame (360° ray tree {:.1}, coverage {:.1}), error 0\n\
          {:>8} {:>14} {:>10} {:>10} {:>14} {:>10} {:>10}\n",
         a.scene.display(),
-        scene.len(),
+        m.objects,
         a.depth,
         a.width,
-        used.len(),
-        intervals as f64 / used.len() as f64,
+        m.frames,
+        m.intervals,
         complex_seconds * 1e6,
         out["complex"]["us_ray_tree"].as_f64().unwrap_or(f64::NAN),
         out["complex"]["us_coverage"].as_f64().unwrap_or(f64::NAN),
@@ -392,7 +504,7 @@ pub fn run(a: &Args) -> Result<(), Failure> {
         "error",
         "wrong"
     );
-    for (p, b) in qt.iter().zip(&bv) {
+    for (p, b) in qt.iter().zip(bv) {
         text.push_str(&format!(
             "{:>8} {:>14.1} {:>10.5} {:>10.5} {:>14.1} {:>10.5} {:>10.5}\n",
             p.samples,

@@ -41,7 +41,10 @@ use vcx_demo::demo::World;
 use vcx_demo::generate::{generate, SceneKind};
 use vcx_demo::scene_file::{ObjectSpec, SceneFile};
 
+use vcx_demo::stress::{Family, SCALES};
+
 use super::bench::{bytes, history_bytes, internal};
+use super::{bench_error, stability};
 use super::{write_stdout, Failure};
 
 /// Arguments of `vcx bench figures`.
@@ -141,6 +144,16 @@ pub(crate) const FIGURES: &[Figure] = &[
         title: "Figs. 17–19: screens on grid lines in kd-tree fashion, inserted first",
         run: fig_screens,
     },
+    Figure {
+        name: "error",
+        title: "Run time against error: the complex against the ray casters (hall and mixed, depth 5)",
+        run: fig_error,
+    },
+    Figure {
+        name: "stability",
+        title: "Numerical stability: near-degenerate scenes at every scale",
+        run: fig_stability,
+    },
 ];
 
 /// The sizes of one run.
@@ -171,6 +184,24 @@ pub(crate) struct Sizes {
     pub screen_cells: i32,
     /// Numbers of screens of Figs. 17–19.
     pub screens: Vec<usize>,
+    /// Ray-tree depth of run time against error.
+    pub error_depth: usize,
+    /// Columns per frame of run time against error.
+    pub error_width: usize,
+    /// Samples per column of the ray casters.
+    pub error_samples: Vec<usize>,
+    /// Frames of run time against error.
+    pub error_frames: usize,
+    /// Runs per frame (the best is kept) of run time against error.
+    pub error_repeat: u32,
+    /// Stress instances per family and scale.
+    pub stability_instances: u64,
+    /// Objects per stress scene.
+    pub stability_objects: usize,
+    /// Viewpoints per stress scene.
+    pub stability_views: usize,
+    /// Runs per stress build and set of views (the best is kept).
+    pub stability_repeat: u32,
 }
 
 impl Sizes {
@@ -190,6 +221,15 @@ impl Sizes {
                 mixed_frames: 3,
                 screen_cells: 4,
                 screens: vec![0, 1, 3],
+                error_depth: 5,
+                error_width: 40,
+                error_samples: vec![1, 4],
+                error_frames: 2,
+                error_repeat: 1,
+                stability_instances: 1,
+                stability_objects: 6,
+                stability_views: 3,
+                stability_repeat: 1,
             }
         } else if quick {
             Sizes {
@@ -206,6 +246,16 @@ impl Sizes {
                 mixed_frames: 24,
                 screen_cells: 8,
                 screens: vec![0, 1, 3, 7, 15, 31, 63],
+                error_depth: 5,
+                error_width: 400,
+                error_samples: vec![1, 2, 4, 8, 16, 32, 64, 128],
+                error_frames: 4,
+                error_repeat: 2,
+                // `vcx bench stability --quick`.
+                stability_instances: 2,
+                stability_objects: 12,
+                stability_views: 8,
+                stability_repeat: 1,
             }
         } else {
             Sizes {
@@ -222,6 +272,16 @@ impl Sizes {
                 mixed_frames: 40,
                 screen_cells: 12,
                 screens: vec![0, 1, 3, 7, 15, 31, 63, 143],
+                // The defaults of `vcx bench error` and `vcx bench stability`.
+                error_depth: 5,
+                error_width: 800,
+                error_samples: vec![1, 2, 4, 8, 16, 32, 64, 128, 256],
+                error_frames: 8,
+                error_repeat: 3,
+                stability_instances: 10,
+                stability_objects: 40,
+                stability_views: 24,
+                stability_repeat: 5,
             }
         }
     }
@@ -1070,6 +1130,399 @@ fn fig_screens(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 series: vec![series("depth-0 ray tree", fps)],
             },
         ],
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Run time against error (issue 6, item 2) and numerical stability (item 4): the
+// measurements of `vcx bench error` and `vcx bench stability`, shown as figures.
+
+/// The scenes of `vcx bench error` in BENCHMARKS.md: `std-demo/scenes/hall.json` and
+/// `mixed.json` are `vcx gen` of these.
+const ERROR_SCENES: [(SceneKind, u32); 2] = [(SceneKind::Hall, 12), (SceneKind::Mixed, 30)];
+
+/// A share in `[0, 1]` as a percentage.
+fn percent(v: f64) -> String {
+    format!("{:.3} %", 100.0 * v)
+}
+
+/// One caster against the complex, for the caption: speed-up at each error limit and the
+/// error at equal time.
+fn versus_text(name: &str, v: &bench_error::Versus) -> String {
+    let mut parts = Vec::new();
+    for (((_, limit), at), speedup) in bench_error::LIMITS.iter().zip(v.at).zip(v.speedup) {
+        let what = match (at, speedup) {
+            (Some(p), Some((x, _))) => format!("{x:.2}× (s = {})", p.samples),
+            (None, Some((x, _))) => format!("> {x:.2}× (no s reached it)"),
+            _ => "—".to_string(),
+        };
+        parts.push(format!("≤ {} %: {what}", 100.0 * limit));
+    }
+    let equal = v
+        .equal_time
+        .map_or("no s is as fast as the complex".to_string(), |p| {
+            format!(
+                "s = {}: {} error, {} of columns wrong",
+                p.samples,
+                percent(p.error),
+                percent(p.wrong)
+            )
+        });
+    format!(
+        "{name}: speed-up of the complex at equal error {}; error at the complex's time: {equal}",
+        parts.join(", ")
+    )
+}
+
+fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    p.start(ERROR_SCENES.len());
+    let params = bench_error::Params {
+        depth: s.error_depth,
+        width: s.error_width,
+        samples: s.error_samples.clone(),
+        frames: s.error_frames,
+        fov: 90.0,
+        seed: SEED,
+        repeat: s.error_repeat,
+    };
+    let mut rows = Vec::new();
+    let mut notes = Vec::new();
+    let mut plots = Vec::new();
+    for (kind, n) in ERROR_SCENES {
+        let name = kind.name();
+        p.step(&format!("{name} {n}"));
+        let file = generate(kind, n, SEED).map_err(|e| internal(e.to_string()))?;
+        let m = bench_error::measure(&file.scene.as_ref(), &params)?;
+        let c = m.complex_seconds;
+        rows.push(vec![
+            name.to_string(),
+            "complex".to_string(),
+            "exact".to_string(),
+            m.frames.to_string(),
+            format!("{:.1}", c * 1e6),
+            percent(0.0),
+            percent(0.0),
+            "1.00".to_string(),
+        ]);
+        for (method, curve) in [("quadtree", &m.quadtree), ("bvh", &m.bvh)] {
+            for q in curve {
+                rows.push(vec![
+                    name.to_string(),
+                    method.to_string(),
+                    q.samples.to_string(),
+                    m.frames.to_string(),
+                    format!("{:.1}", q.seconds * 1e6),
+                    percent(q.error),
+                    percent(q.wrong),
+                    format!("{:.2}", q.seconds / c),
+                ]);
+            }
+        }
+        notes.push(format!(
+            "* **{name}** (`vcx gen {name} {n} --seed {SEED}`, = `std-demo/scenes/{name}.json`: \
+             {} objects, {:.1} intervals per 360° tree, quadtree of {} nodes): complex {:.1} µs \
+             per frame (ray tree {:.1}, coverage {:.1}).\n  {}.\n  {}.",
+            m.objects,
+            m.intervals,
+            m.quadtree_nodes,
+            c * 1e6,
+            m.tree_seconds * 1e6,
+            m.cover_seconds * 1e6,
+            versus_text("quadtree", &bench_error::versus(&m.quadtree, c)),
+            versus_text("bvh", &bench_error::versus(&m.bvh, c)),
+        ));
+        // Error in % against µs per frame; the complex (error 0, off a log axis) as a
+        // vertical line across the casters' errors, the 1 % target as a horizontal one.
+        let pts = |curve: &[bench_error::Point]| -> Vec<(f64, f64)> {
+            curve
+                .iter()
+                .map(|q| (q.seconds * 1e6, 100.0 * q.error))
+                .collect()
+        };
+        let (qt, bv) = (pts(&m.quadtree), pts(&m.bvh));
+        let positive = || qt.iter().chain(&bv).filter(|q| q.1 > 0.0);
+        let lo = positive().map(|q| q.1).fold(1.0, f64::min);
+        let hi = positive().map(|q| q.1).fold(1.0, f64::max);
+        let t0 = qt.iter().chain(&bv).map(|q| q.0).fold(c * 1e6, f64::min);
+        let t1 = qt.iter().chain(&bv).map(|q| q.0).fold(c * 1e6, f64::max);
+        plots.push(Plot {
+            file: format!("error_{name}.svg"),
+            title: format!(
+                "{name}: coverage error against time per frame, depth {}",
+                s.error_depth
+            ),
+            x_label: "µs per frame",
+            y_label: "mean abs. coverage error per column (%)",
+            log_x: true,
+            log_y: true,
+            series: vec![
+                series("quadtree", qt.clone()),
+                series("bvh (parry2d)", bv.clone()),
+                series("complex (error 0)", vec![(c * 1e6, lo), (c * 1e6, hi)]),
+                series("1 % error", vec![(t0, 1.0), (t1, 1.0)]),
+            ],
+        });
+    }
+    Ok(Output {
+        caption: format!(
+            "The measurement of `vcx bench error SCENE --depth {d} --width {w} --samples {sa} \
+             --frames {f} --repeat {r}` (`std-demo/src/cmd/bench_error.rs`; section \"Run time \
+             against error\"): along {f} free viewpoints of a seeded walk, each 90° frame of \
+             {w} columns is rendered by the complex (the 360° ray tree to depth {d} plus the \
+             exact per-column coverage: the truth, error 0) and by the quadtree and BVH ray \
+             casters with s stratified rays per column. µs per frame: the best of {r} runs of \
+             each frame, median over the frames. Error: half the L1 distance between the \
+             estimated and the exact coverage of a column, averaged over columns and frames; \
+             wrong: share of columns whose dominant branch differs. Time / complex: the \
+             caster's time over the complex's, i.e. the complex's speed-up at that error.\n\n{}",
+            notes.join("\n"),
+            d = s.error_depth,
+            w = s.error_width,
+            sa = s
+                .error_samples
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+            f = s.error_frames,
+            r = s.error_repeat,
+        ),
+        table: Table {
+            header: vec![
+                "<scene",
+                "<method",
+                "samples",
+                "frames",
+                "µs per frame",
+                "mean abs error",
+                "wrong dominant",
+                "time / complex",
+            ],
+            rows,
+        },
+        plots,
+    })
+}
+
+/// The environment variable naming a `vcx` built with `--features naive-f64`, run as a
+/// subprocess for the naive columns of the stability section.
+const NAIVE_ENV: &str = "VCX_FIGURES_NAIVE";
+
+/// The naive run of one family: `vcx bench stability --json` of the binary `bin`.
+fn naive_records(
+    bin: &Path,
+    family: Family,
+    cfg: &stability::Config,
+) -> Result<Vec<stability::Record>, Failure> {
+    let scales: Vec<String> = SCALES.iter().map(|e| e.to_string()).collect();
+    let out = std::process::Command::new(bin)
+        .args(["bench", "stability", "--json", "--families", family.name()])
+        .arg(format!("--scales={}", scales.join(",")))
+        .args(["--instances", &cfg.instances.to_string()])
+        .args(["--objects", &cfg.objects.to_string()])
+        .args(["--views", &cfg.views.to_string()])
+        .args(["--repeat", &cfg.repeat.to_string()])
+        .args(["--seed", &cfg.seed.to_string()])
+        .output()
+        .map_err(|e| Failure::bad_input(format!("{NAIVE_ENV}={}: {e}", bin.display())))?;
+    if !out.status.success() {
+        return Err(Failure::bad_input(format!(
+            "{NAIVE_ENV}={}: {}",
+            bin.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    let records = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(serde_json::from_str::<stability::Record>)
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| Failure::bad_input(format!("{NAIVE_ENV}={}: {e}", bin.display())))?;
+    if let Some(r) = records.iter().find(|r| r.variant != "naive-f64") {
+        return Err(Failure::bad_input(format!(
+            "{NAIVE_ENV}={}: a {} binary, expected naive-f64",
+            bin.display(),
+            r.variant
+        )));
+    }
+    Ok(records)
+}
+
+fn fig_stability(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    let cfg = stability::Config {
+        instances: s.stability_instances,
+        objects: s.stability_objects,
+        views: s.stability_views,
+        repeat: s.stability_repeat,
+        seed: SEED,
+    };
+    let variant = stability::variant();
+    // The naive columns need a second binary; only an exact one can judge it.
+    let naive = std::env::var_os(NAIVE_ENV)
+        .filter(|v| !v.is_empty() && variant == "exact")
+        .map(PathBuf::from);
+    p.start(Family::ALL.len() * SCALES.len());
+    let mut rows = Vec::new();
+    let (mut build, mut walk) = (Vec::new(), Vec::new());
+    let mut differ = Vec::new();
+    for f in Family::ALL {
+        let records = stability::measure_all(
+            &[f],
+            &SCALES,
+            &cfg,
+            |f, e| p.step(&format!("{} 2^{e}", f.name())),
+            |_| Ok(()),
+        )?;
+        let joined = match &naive {
+            Some(bin) => Some(stability::join(&records, &naive_records(bin, f, &cfg)?)?),
+            None => None,
+        };
+        let t = stability::tally(&records);
+        let per = |v: f64, k: usize| v / k.max(1) as f64;
+        let (mut b, mut w) = (Vec::new(), Vec::new());
+        for &e in &SCALES {
+            let at = stability::tally(records.iter().filter(|r| r.scale == e));
+            b.push((f64::from(e), 1e3 * per(at.build_s, at.instances)));
+            w.push((f64::from(e), 1e3 * per(at.walk_s, at.instances)));
+        }
+        build.push(series(f.name(), b));
+        walk.push(series(f.name(), w));
+        let mut row = vec![
+            f.name().to_string(),
+            SCALES.len().to_string(),
+            t.instances.to_string(),
+            if t.failing.is_empty() {
+                "0".to_string()
+            } else {
+                format!("{} ({})", t.failing.len(), t.failing.join(", "))
+            },
+            t.views.to_string(),
+            t.views_failing.to_string(),
+            format!("{:.3}", 1e3 * per(t.build_s, t.instances)),
+            format!("{:.3}", 1e3 * per(t.walk_s, t.instances)),
+        ];
+        match &joined {
+            Some(j) => {
+                if let Some((_, r)) = j.by_family.first() {
+                    // family, scales, instances, then the naive columns.
+                    row.extend(r.cells("", "").into_iter().skip(3));
+                }
+                differ.push(series(
+                    f.name(),
+                    j.rows
+                        .iter()
+                        .map(|((_, e), r)| {
+                            let share = r.views_differ as f64 / r.views.max(1) as f64;
+                            (f64::from(*e), 100.0 * share)
+                        })
+                        .collect(),
+                ));
+            }
+            None => row.extend(["—"; 5].map(String::from)),
+        }
+        rows.push(row);
+    }
+    let (fails, views_fail) = if variant == "exact" {
+        ("exact builds failing", "exact views failing")
+    } else {
+        ("naive builds failing", "naive views failing")
+    };
+    let naive_note = match &naive {
+        Some(bin) => format!(
+            "Naive columns: the same scenes run by `{} bench stability --json` (`{NAIVE_ENV}`), \
+             per family right after the exact run, joined as by `vcx bench stability \
+             --compare`: naive builds that fail (scene rejected, sweep error, `validate()` \
+             failed, panic), naive views that differ from the exact build's view of the same \
+             instance, exact failures (must be 0), and the time ratios exact/naive summed where \
+             both built.",
+            bin.display()
+        ),
+        None => format!(
+            "The naive-`f64` columns are empty (—): the predicates are fixed at compile time \
+             (`vcx::geom::NAIVE_F64`), so this binary runs only the {variant} variant. To fill \
+             them, build the naive binary and name it in `{NAIVE_ENV}`: `cargo build --release \
+             -p vcx-demo --features naive-f64 --target-dir /tmp/target-naive` then \
+             `{NAIVE_ENV}=/tmp/target-naive/release/vcx vcx bench figures` (same options); or \
+             join two runs of `vcx bench stability --json` with `vcx bench stability --compare \
+             EXACT.json NAIVE.json` (BENCHMARKS.md, \"Numerical stability\")."
+        ),
+    };
+    let mut plots = vec![
+        Plot {
+            file: "stability_build_time.svg".into(),
+            title: format!("Stress families: construction time against scale ({variant})"),
+            x_label: "scale e (max |coordinate| = 2^e)",
+            y_label: "ms per build",
+            log_x: false,
+            log_y: true,
+            series: build,
+        },
+        Plot {
+            file: "stability_walk_time.svg".into(),
+            title: format!(
+                "Stress families: time of {} views against scale ({variant})",
+                s.stability_views
+            ),
+            x_label: "scale e (max |coordinate| = 2^e)",
+            y_label: "ms per instance",
+            log_x: false,
+            log_y: true,
+            series: walk,
+        },
+    ];
+    if naive.is_some() {
+        plots.push(Plot {
+            file: "stability_naive_views.svg".into(),
+            title: "Naive f64: views differing from the exact ones against scale".into(),
+            x_label: "scale e (max |coordinate| = 2^e)",
+            y_label: "% of views",
+            log_x: false,
+            log_y: false,
+            series: differ,
+        });
+    }
+    Ok(Output {
+        caption: format!(
+            "The measurement of `vcx bench stability --instances {i} --objects {o} --views {v} \
+             --repeat {r} --seed {SEED}` (`std-demo/src/cmd/stability.rs`; section \"Numerical \
+             stability\"), {variant} predicates: per family of near-degenerate scenes \
+             (`std-demo/src/stress.rs`) and each of the {k} scales 2^e, e = {scales} (the largest \
+             coordinate in scene units), {i} instances of {o} objects: build the complex by the \
+             sweep, `validate()` it and walk the full view from {v} viewpoints each. Builds \
+             failing: scene rejected, sweep error, failed validation or panic; views failing: \
+             a walk's error or panic. Times: best of {r} runs, per instance, averaged over the \
+             scales. The exact build is checked against the big-rational reference by \
+             `tests/tests/stability.rs`. {naive_note}",
+            i = s.stability_instances,
+            o = s.stability_objects,
+            v = s.stability_views,
+            r = s.stability_repeat,
+            k = SCALES.len(),
+            scales = SCALES
+                .iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+        ),
+        table: Table {
+            header: vec![
+                "<family",
+                "scales",
+                "instances",
+                fails,
+                "views",
+                views_fail,
+                "build ms per instance",
+                "walk ms per instance",
+                "naive builds failing",
+                "naive views differing from exact",
+                "exact failures",
+                "build time exact/naive",
+                "walk time exact/naive",
+            ],
+            rows,
+        },
+        plots,
     })
 }
 

@@ -17,6 +17,9 @@
 //! The judge of the naive views is the exact build. The exact build itself has no judge
 //! here: `tests/tests/stability.rs` checks it against the big-rational reference
 //! (`tests/src/reference/view.rs`) on every family and scale at a small size.
+//!
+//! The measurement is [`measure_all`] (one [`Record`] per instance), shared with the
+//! "stability" section of `vcx bench figures`; [`join`] is the comparison's arithmetic.
 
 use core::panic::AssertUnwindSafe;
 use std::collections::BTreeMap;
@@ -142,19 +145,86 @@ pub fn run(a: &Args) -> Result<(), Failure> {
     } else {
         a.scales.clone()
     };
-    let (instances, objects, views, repeat) = if a.quick {
-        (2, 12, 8, 1)
-    } else {
-        (10, 40, 24, 5)
-    };
+    let base = Config::new(a.quick, a.seed);
     let cfg = Config {
-        instances: a.instances.unwrap_or(instances),
-        objects: a.objects.unwrap_or(objects),
-        views: a.views.unwrap_or(views),
-        repeat: a.repeat.unwrap_or(repeat).max(1),
+        instances: a.instances.unwrap_or(base.instances),
+        objects: a.objects.unwrap_or(base.objects),
+        views: a.views.unwrap_or(base.views),
+        repeat: a.repeat.unwrap_or(base.repeat).max(1),
         seed: a.seed,
     };
+    let progress = std::io::stderr().is_terminal();
+    let result = measure_all(
+        &families,
+        &scales,
+        &cfg,
+        |f, e| {
+            if progress {
+                eprint!("\r{} scale {e:>3}    ", f.name());
+            }
+        },
+        |r| {
+            if a.json {
+                let line =
+                    serde_json::to_string(r).map_err(|e| Failure::bad_input(e.to_string()))?;
+                write_stdout(&format!("{line}\n"))?;
+            }
+            Ok(())
+        },
+    );
+    if progress {
+        eprintln!();
+    }
+    let records = result?;
+    if a.json {
+        return Ok(());
+    }
+    write_stdout(&summary(&records))
+}
 
+/// Sizes of a run.
+pub(crate) struct Config {
+    /// Instances per family and scale.
+    pub instances: u64,
+    /// Objects per scene.
+    pub objects: usize,
+    /// Viewpoints per scene.
+    pub views: usize,
+    /// Timed runs per build and per set of views (the best is kept), at least 1.
+    pub repeat: u32,
+    /// Seed of the scene generators.
+    pub seed: u64,
+}
+
+impl Config {
+    /// The defaults of `vcx bench stability` (`--quick`: smaller).
+    pub(crate) fn new(quick: bool, seed: u64) -> Config {
+        let (instances, objects, views, repeat) = if quick {
+            (2, 12, 8, 1)
+        } else {
+            (10, 40, 24, 5)
+        };
+        Config {
+            instances,
+            objects,
+            views,
+            repeat,
+            seed,
+        }
+    }
+}
+
+/// Generates and measures every instance of `families` × `scales`, in that order: calls
+/// `at` before each family and scale and `each` on each record as it is measured (an error
+/// of `each` stops the run). Panics are caught and recorded; the panic hook is restored
+/// before returning.
+pub(crate) fn measure_all(
+    families: &[Family],
+    scales: &[i32],
+    cfg: &Config,
+    mut at: impl FnMut(Family, i32),
+    mut each: impl FnMut(&Record) -> Result<(), Failure>,
+) -> Result<Vec<Record>, Failure> {
     // Panics are results here: record them quietly instead of the one-line exit.
     let previous = std::panic::take_hook();
     std::panic::set_hook(Box::new(|info| {
@@ -162,14 +232,11 @@ pub fn run(a: &Args) -> Result<(), Failure> {
             *m = super::panic_message(info);
         }
     }));
-    let progress = std::io::stderr().is_terminal();
     let mut records = Vec::new();
     let mut result = Ok(());
-    'all: for &f in &families {
-        for &e in &scales {
-            if progress {
-                eprint!("\r{} scale {e:>3}    ", f.name());
-            }
+    'all: for &f in families {
+        for &e in scales {
+            at(f, e);
             for i in 0..cfg.instances {
                 let s = match stress::generate(f, e, cfg.objects, cfg.views, cfg.seed, i) {
                     Ok(s) => s,
@@ -178,45 +245,21 @@ pub fn run(a: &Args) -> Result<(), Failure> {
                         break 'all;
                     }
                 };
-                let r = measure(&s, i, &cfg);
-                if a.json {
-                    match serde_json::to_string(&r) {
-                        Ok(line) => {
-                            if let Err(e) = write_stdout(&format!("{line}\n")) {
-                                result = Err(e);
-                                break 'all;
-                            }
-                        }
-                        Err(e) => {
-                            result = Err(Failure::bad_input(e.to_string()));
-                            break 'all;
-                        }
-                    }
+                let r = measure(&s, i, cfg);
+                if let Err(e) = each(&r) {
+                    result = Err(e);
+                    break 'all;
                 }
                 records.push(r);
             }
         }
     }
-    if progress {
-        eprintln!();
-    }
     std::panic::set_hook(previous);
-    result?;
-    if a.json {
-        return Ok(());
-    }
-    write_stdout(&summary(&records))
+    result.map(|()| records)
 }
 
-struct Config {
-    instances: u64,
-    objects: usize,
-    views: usize,
-    repeat: u32,
-    seed: u64,
-}
-
-fn variant() -> &'static str {
+/// `exact` or `naive-f64`: the predicates this binary was built with.
+pub(crate) fn variant() -> &'static str {
     if vcx::geom::NAIVE_F64 {
         "naive-f64"
     } else {
@@ -351,7 +394,8 @@ fn view_key(v: &[ViewInterval]) -> String {
     format!("{:016x}:{}", h.finish(), v.len())
 }
 
-fn is_view(key: &str) -> bool {
+/// Whether a view key of [`Record::views`] is a view (not `error: …` or `panic: …`).
+pub(crate) fn is_view(key: &str) -> bool {
     !key.starts_with("error") && !key.starts_with("panic")
 }
 
@@ -375,6 +419,39 @@ fn groups(records: &[Record]) -> Vec<((String, i32), Vec<&Record>)> {
         .collect()
 }
 
+/// Totals of one run over some records (no judge: see the module documentation).
+#[derive(Default)]
+pub(crate) struct Tally {
+    /// Instances.
+    pub instances: usize,
+    /// The [`Record::build`] of every failed build, in order.
+    pub failing: Vec<String>,
+    /// Views walked.
+    pub views: usize,
+    /// Views that failed (an error or a panic).
+    pub views_failing: usize,
+    /// Summed best build seconds.
+    pub build_s: f64,
+    /// Summed best walk seconds.
+    pub walk_s: f64,
+}
+
+/// Adds up `records`.
+pub(crate) fn tally<'a>(records: impl IntoIterator<Item = &'a Record>) -> Tally {
+    let mut t = Tally::default();
+    for r in records {
+        t.instances += 1;
+        if r.build != "ok" {
+            t.failing.push(r.build.clone());
+        }
+        t.views += r.views.len();
+        t.views_failing += r.views.iter().filter(|v| !is_view(v)).count();
+        t.build_s += r.build_s.unwrap_or(0.0);
+        t.walk_s += r.walk_s.unwrap_or(0.0);
+    }
+    t
+}
+
 /// The table of one run (no judge: see the module documentation).
 fn summary(records: &[Record]) -> String {
     let mut out = format!(
@@ -386,25 +463,16 @@ fn summary(records: &[Record]) -> String {
         variant()
     );
     for ((family, scale), rs) in groups(records) {
-        let failing: Vec<&str> = rs
-            .iter()
-            .filter(|r| r.build != "ok")
-            .map(|r| r.build.as_str())
-            .collect();
-        let views: usize = rs.iter().map(|r| r.views.len()).sum();
-        let bad: usize = rs
-            .iter()
-            .map(|r| r.views.iter().filter(|v| !is_view(v)).count())
-            .sum();
-        let build_ms: f64 = rs.iter().filter_map(|r| r.build_s).sum::<f64>() * 1e3;
-        let walk_ms: f64 = rs.iter().filter_map(|r| r.walk_s).sum::<f64>() * 1e3;
+        let t = tally(rs);
+        let (views, bad) = (t.views, t.views_failing);
+        let (build_ms, walk_ms) = (t.build_s * 1e3, t.walk_s * 1e3);
         out += &format!(
             "| {family} | 2^{scale} | {} | {} | {views} | {bad} | {build_ms:.2} | {walk_ms:.2} |\n",
-            rs.len(),
-            if failing.is_empty() {
+            t.instances,
+            if t.failing.is_empty() {
                 "0".to_string()
             } else {
-                format!("{} ({})", failing.len(), failing.join(", "))
+                format!("{} ({})", t.failing.len(), t.failing.join(", "))
             }
         );
     }
@@ -426,15 +494,23 @@ fn read_records(path: &PathBuf) -> Result<Vec<Record>, Failure> {
 
 /// Totals of one row of the comparison.
 #[derive(Default)]
-struct Row {
-    instances: usize,
-    naive_build_fail: usize,
-    naive_fail_kinds: BTreeMap<String, usize>,
-    views: usize,
-    views_differ: usize,
-    exact_fail: usize,
-    build: (f64, f64),
-    walk: (f64, f64),
+pub(crate) struct Row {
+    /// Instances joined.
+    pub instances: usize,
+    /// Naive builds that failed.
+    pub naive_build_fail: usize,
+    /// Naive builds that failed, by [`Record::build`].
+    pub naive_fail_kinds: BTreeMap<String, usize>,
+    /// Exact views compared (where the naive build returned a complex).
+    pub views: usize,
+    /// Naive views differing from the exact ones.
+    pub views_differ: usize,
+    /// Exact builds and views that failed (must be 0).
+    pub exact_fail: usize,
+    /// Summed build seconds (exact, naive) where both built.
+    pub build: (f64, f64),
+    /// Summed walk seconds (exact, naive) where both walked.
+    pub walk: (f64, f64),
 }
 
 impl Row {
@@ -485,6 +561,11 @@ impl Row {
     }
 
     fn line(&self, family: &str, scale: &str) -> String {
+        format!("| {} |\n", self.cells(family, scale).join(" | "))
+    }
+
+    /// The cells of the comparison table's row.
+    pub(crate) fn cells(&self, family: &str, scale: &str) -> Vec<String> {
         let pct = |a: usize, b: usize| {
             if b == 0 {
                 "—".to_string()
@@ -509,15 +590,16 @@ impl Row {
                 .collect();
             format!(": {}", k.join(", "))
         };
-        format!(
-            "| {family} | {scale} | {} | {}{kinds} | {} | {} | {} | {} |\n",
-            self.instances,
-            pct(self.naive_build_fail, self.instances),
+        vec![
+            family.to_string(),
+            scale.to_string(),
+            self.instances.to_string(),
+            format!("{}{kinds}", pct(self.naive_build_fail, self.instances)),
             pct(self.views_differ, self.views),
-            self.exact_fail,
+            self.exact_fail.to_string(),
             ratio(self.build),
             ratio(self.walk),
-        )
+        ]
     }
 }
 
@@ -538,13 +620,52 @@ fn compare(exact: &PathBuf, naive: &PathBuf) -> Result<(), Failure> {
             r.variant
         )));
     }
+    let j = join(&er, &nr)?;
+    let mut out = String::from(
+        "| family | scale (max \\|coord\\|) | instances | naive builds failing | naive views differing from exact | exact failures | build time exact/naive | walk time exact/naive |\n\
+         |---|---:|---:|---|---|---:|---:|---:|\n",
+    );
+    for ((family, scale), row) in &j.rows {
+        out += &row.line(family, &format!("2^{scale}"));
+    }
+    out += "\nPer family, all scales:\n\n\
+            | family | scales | instances | naive builds failing | naive views differing from exact | exact failures | build time exact/naive | walk time exact/naive |\n\
+            |---|---:|---:|---|---|---:|---:|---:|\n";
+    for (family, row) in &j.by_family {
+        out += &row.line(family, "all");
+    }
+    out += &j.total.line("**all**", "all");
+    if j.unmatched > 0 {
+        out += &format!(
+            "\n{} exact instances had no naive counterpart.\n",
+            j.unmatched
+        );
+    }
+    write_stdout(&out)
+}
+
+/// The comparison of an exact and a naive run.
+pub(crate) struct Joined {
+    /// Per family and scale, in the order of the exact run.
+    pub rows: Vec<((String, i32), Row)>,
+    /// Per family, all scales.
+    pub by_family: Vec<(String, Row)>,
+    /// Everything.
+    pub total: Row,
+    /// Exact instances without a naive counterpart.
+    pub unmatched: usize,
+}
+
+/// Joins the records of an exact run `er` and a naive run `nr` by family, scale, instance
+/// and seed (the scenes must be the same).
+pub(crate) fn join(er: &[Record], nr: &[Record]) -> Result<Joined, Failure> {
     let key = |r: &Record| (r.family.clone(), r.scale, r.instance, r.seed);
     let naive_by_key: BTreeMap<_, &Record> = nr.iter().map(|r| (key(r), r)).collect();
     let mut rows: Vec<((String, i32), Row)> = Vec::new();
     let mut by_family: Vec<(String, Row)> = Vec::new();
     let mut total = Row::default();
     let mut unmatched = 0;
-    for ((family, scale), rs) in groups(&er) {
+    for ((family, scale), rs) in groups(er) {
         let mut row = Row::default();
         for e in rs {
             let Some(n) = naive_by_key.get(&key(e)) else {
@@ -570,22 +691,10 @@ fn compare(exact: &PathBuf, naive: &PathBuf) -> Result<(), Failure> {
         total.merge(&row);
         rows.push(((family, scale), row));
     }
-    let mut out = String::from(
-        "| family | scale (max \\|coord\\|) | instances | naive builds failing | naive views differing from exact | exact failures | build time exact/naive | walk time exact/naive |\n\
-         |---|---:|---:|---|---|---:|---:|---:|\n",
-    );
-    for ((family, scale), row) in &rows {
-        out += &row.line(family, &format!("2^{scale}"));
-    }
-    out += "\nPer family, all scales:\n\n\
-            | family | scales | instances | naive builds failing | naive views differing from exact | exact failures | build time exact/naive | walk time exact/naive |\n\
-            |---|---:|---:|---|---|---:|---:|---:|\n";
-    for (family, row) in &by_family {
-        out += &row.line(family, "all");
-    }
-    out += &total.line("**all**", "all");
-    if unmatched > 0 {
-        out += &format!("\n{unmatched} exact instances had no naive counterpart.\n");
-    }
-    write_stdout(&out)
+    Ok(Joined {
+        rows,
+        by_family,
+        total,
+        unmatched,
+    })
 }
