@@ -191,7 +191,8 @@ impl<S: Storage> Complex<S> {
     /// four times the number of cylinders. The start cylinder is found among the cylinders
     /// at θ = 0 (left wall [`Wall::Zero`]) in arena order: both constructions number those
     /// first (the sweep creates them first, `History::complex` puts them first), so the
-    /// scan stops within them — O(cylinders at θ = 0), about 3n for the grid scenes.
+    /// scan stops within them — O(cylinders at θ = 0), about 3n for the grid scenes — and
+    /// the exact test runs only on those whose chains' heights bracket `q`.
     pub fn walk_trace(
         &self,
         scene: &SceneRef<'_>,
@@ -201,11 +202,28 @@ impl<S: Storage> Complex<S> {
         if let Some(l) = crate::partition::point_in_scene(scene, q) {
             return Err(WalkError::NotFree(l));
         }
+        // At θ = 0 a chain's tangent is its object's lowest (lower chain) or highest (upper
+        // chain) vertex, so a cylinder whose bottom tangent lies above `q` or whose top
+        // tangent lies below it (in y, from the bounding boxes: exact integers) cannot hold
+        // `q`'s line; the exact, perturbed test runs on the few that remain.
+        let qy = i128::from(q.y());
+        let height = |chain: &Chain| {
+            let (lo, hi) = scene.object(chain.object)?.bbox();
+            let p = match chain.bound {
+                Bound::Lower => lo,
+                Bound::Upper => hi,
+            };
+            Some(i128::from(p.to_query().y()))
+        };
         let zero = self
             .cylinders()
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.left == Wall::Zero)
+            .filter(|(_, c)| {
+                c.left == Wall::Zero
+                    && c.bottom.is_none_or(|b| height(&b).is_none_or(|y| y <= qy))
+                    && c.top.is_none_or(|t| height(&t).is_none_or(|y| y >= qy))
+            })
             .map(|(i, c)| (CylinderId::from_index(i).unwrap_or(CylinderId::ZERO), c));
         let cur = self
             .locate_among(scene, q, &Angle::ZERO, zero)

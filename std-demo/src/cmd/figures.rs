@@ -1,5 +1,6 @@
 //! `vcx bench figures [--quick] [--out DIR]`: the paper's experiments (Cho & Forsyth 1999,
-//! §7, Figs. 9–19) measured on this machine in one run, as tables and SVG plots in `DIR`
+//! §7, Figs. 9–19), run time against error and the numerical-stability stress test
+//! measured on this machine in one run, as tables and SVG plots in `DIR`
 //! (default `bench-out/`) and `DIR/BENCHMARKS.generated.md` (every table, the machine, the
 //! date and the command line). `--quick` runs every figure at smaller sizes (CI smoke use);
 //! the environment variable `VCX_FIGURES_TINY=1` shrinks them further (for the CLI test).
@@ -14,11 +15,21 @@
 //! * Figs. 14–15: the mixed scene against n at depth 5;
 //! * Fig. 16: active set (cylinders touched per frame) against n, grid scene;
 //! * Figs. 17–19: screens placed kd-tree fashion and inserted first: size, build time and
-//!   frame rate against the number of screens.
-//!
-//! Measured elsewhere and to be appended as entries by their owners: the classical ray
-//! casters of Figs. 12–15 and run time against coverage error (item 2, `vcx bench error`),
-//! and the numerical-stability stress test (item 4, `vcx bench stability`).
+//!   frame rate against the number of screens;
+//! * "error" (item 2): run time against coverage error, the complex against the quadtree
+//!   and BVH ray casters on the hall of mirrors and the mixed scene at depth 5 — time per
+//!   frame, mean absolute error and wrong columns per samples per column, the speed-up at
+//!   equal error and the error at equal time; plots of error against time (log–log). The
+//!   measurement is `vcx bench error`'s ([`bench_error::measure`]): the classical ray
+//!   casters of Figs. 12–15 appear here, on those two scenes, not against depth or n;
+//! * "stability" (item 4): per family of near-degenerate scenes, failed builds and views
+//!   and times of the predicates this binary was built with, measured as by
+//!   `vcx bench stability` ([`stability::measure_all`]). The naive-`f64` predicates are a
+//!   compile-time choice: with `VCX_FIGURES_NAIVE=PATH` naming a `vcx` built with
+//!   `--features naive-f64`, that binary is run per family on the same scenes and joined
+//!   as by `vcx bench stability --compare` (naive failures, views differing from the exact
+//!   ones, time ratios, one more plot); without it those columns are left empty and the
+//!   caption says how to fill them.
 //!
 //! A frame is the exact full 360° view (or ray tree) from a viewpoint of the built-in
 //! circuit ([`vcx_demo::demo::trajectory::circuit`], room capped at 1/2 unit): the core has no walk restricted to a
@@ -248,7 +259,7 @@ impl Sizes {
                 screens: vec![0, 1, 3, 7, 15, 31, 63],
                 error_depth: 5,
                 error_width: 400,
-                error_samples: vec![1, 2, 4, 8, 16, 32, 64, 128],
+                error_samples: vec![1, 2, 4, 8, 16, 32, 64, 128, 256],
                 error_frames: 4,
                 error_repeat: 2,
                 // `vcx bench stability --quick`.
@@ -1146,14 +1157,26 @@ fn percent(v: f64) -> String {
     format!("{:.3} %", 100.0 * v)
 }
 
+/// A ratio with three significant digits or so: `0.0123×`, `1.14×`, `69×`.
+fn ratio(x: f64) -> String {
+    if x >= 10.0 {
+        format!("{x:.0}×")
+    } else if x >= 1.0 {
+        format!("{x:.2}×")
+    } else {
+        format!("{x:.3}×")
+    }
+}
+
 /// One caster against the complex, for the caption: speed-up at each error limit and the
 /// error at equal time.
 fn versus_text(name: &str, v: &bench_error::Versus) -> String {
     let mut parts = Vec::new();
     for (((_, limit), at), speedup) in bench_error::LIMITS.iter().zip(v.at).zip(v.speedup) {
         let what = match (at, speedup) {
-            (Some(p), Some((x, _))) => format!("{x:.2}× (s = {})", p.samples),
-            (None, Some((x, _))) => format!("> {x:.2}× (no s reached it)"),
+            (Some(p), Some((x, _))) => format!("{} (s = {})", ratio(x), p.samples),
+            // Time grows with the samples: the most samples measured give a lower bound.
+            (None, Some((x, _))) => format!("≥ {} (no s reached it)", ratio(x)),
             _ => "—".to_string(),
         };
         parts.push(format!("≤ {} %: {what}", 100.0 * limit));
