@@ -936,7 +936,7 @@ pub fn compare_locate(
 }
 
 /// (object, vertex id as written) of a global vertex index.
-fn written_vertex(s: &SceneRef<'_>, k: usize) -> Option<(u32, usize)> {
+pub fn written_vertex(s: &SceneRef<'_>, k: usize) -> Option<(u32, usize)> {
     s.objects().iter().enumerate().find_map(|(i, o)| {
         (o.first_vertex()..o.first_vertex() + o.len())
             .contains(&k)
@@ -944,7 +944,8 @@ fn written_vertex(s: &SceneRef<'_>, k: usize) -> Option<(u32, usize)> {
     })
 }
 
-fn same_direction(v: (i128, i128), r: &Vec2) -> bool {
+/// Whether the integer vector `v` points exactly along the reference direction `r`.
+pub fn same_direction(v: (i128, i128), r: &Vec2) -> bool {
     let big = |x: i128| BigRational::from_integer(BigInt::from(x));
     let d = Vec2::new(big(v.0), big(v.1));
     d.cross(r).is_zero() && d.dot(r).is_positive()

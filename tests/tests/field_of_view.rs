@@ -12,6 +12,7 @@ use vcx::partition::build_by_sweep;
 use vcx::walk::view_range;
 use vcx::{Material, ObjectId, QueryPoint, SubScene};
 use vcx_demo::generate::{generate, SceneKind};
+use vcx_tests::generators::{same_direction, written_vertex};
 use vcx_tests::reference::{self, Vec2};
 
 fn long() -> bool {
@@ -81,20 +82,6 @@ fn restrict(full: &[reference::Interval<Option<ObjectId>>], from: &Vec2, to: &Ve
         ));
     }
     rows
-}
-
-fn written(s: &vcx::SceneRef<'_>, k: usize) -> (u32, usize) {
-    for (i, o) in s.objects().iter().enumerate() {
-        if (o.first_vertex()..o.first_vertex() + o.len()).contains(&k) {
-            return (i as u32, o.written_vertex_id(k - o.first_vertex()));
-        }
-    }
-    panic!("vertex {k} out of range")
-}
-
-fn same_direction(v: (i128, i128), r: &Vec2) -> bool {
-    let d = Vec2::from_i64(v.0 as i64, v.1 as i64);
-    d.cross(r).is_zero() && d.dot(r).is_positive()
 }
 
 #[test]
@@ -177,7 +164,12 @@ fn field_of_view_is_the_restriction_of_the_full_view() {
                 for (g, w) in got.iter().zip(&want) {
                     assert_eq!(g.object.and_then(|o| sub.original(o)), w.1, "{}", show());
                     assert!(same_direction(g.start.vector(), &w.0), "{}", show());
-                    assert_eq!(g.start_vertex.map(|k| written(&s, k)), w.2, "{}", show());
+                    assert_eq!(
+                        g.start_vertex.and_then(|k| written_vertex(&s, k)),
+                        w.2,
+                        "{}",
+                        show()
+                    );
                 }
                 compared += 1;
             }

@@ -756,26 +756,14 @@ impl Tree<'_, '_> {
         first: Boundary,
         front: bool,
     ) -> Vec<(Dir, Dir, Boundary, (usize, usize))> {
-        let Some(obj) = self.scene.object(m) else {
-            return Vec::new();
-        };
-        let (f, n) = (obj.first_vertex(), obj.len());
         let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
         // Both ends on one direction (see `map_range`): the one edge the ray just before
         // `hi` crosses, else the one just after it, as `floor_pieces` takes such a range.
         if cross(lv, hv) == 0 {
-            return self.split_collapsed(eye, m, lo, hi, first, front);
+            return self.split_collapsed(eye, m, (lo, hi), first, front);
         }
         let mut out = Vec::new();
-        for k in 0..n {
-            let (ia, ib) = (f + k, f + (k + 1) % n);
-            let s = side(self.qpoint(ia), self.qpoint(ib), eye);
-            // Counter-clockwise from the eye a front edge spans b → a, a back edge a → b.
-            let (s0, s1) = match (front, s) {
-                (true, Sign::Negative) => (ib, ia),
-                (false, Sign::Positive) => (ia, ib),
-                _ => continue,
-            };
+        for ((ia, ib), (s0, s1)) in self.facing_edges(eye, m, front) {
             let (v0, v1) = (diff(self.qpoint(s0), eye), diff(self.qpoint(s1), eye));
             // Against the range ends exactly (`Dir::turn`).
             let (start, boundary, sv) = if lo.turn(v0) == Sign::Positive {
@@ -805,31 +793,43 @@ impl Tree<'_, '_> {
         out
     }
 
-    /// [`Tree::split`] of a range collapsed onto one direction `hi`: the edge crossed just
-    /// before it, else just after it (at most one piece).
+    /// The edges of `m` facing `eye` (`front`) or facing away from it: each as `(a, b)` in
+    /// `m`'s order and as `(s0, s1)`, its endpoints counter-clockwise from the eye (a front
+    /// edge spans b → a, a back edge a → b). Global vertex indices.
+    fn facing_edges(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        front: bool,
+    ) -> impl Iterator<Item = ((usize, usize), (usize, usize))> + Clone + '_ {
+        let (f, n) = self
+            .scene
+            .object(m)
+            .map_or((0, 0), |o| (o.first_vertex(), o.len()));
+        (0..n).filter_map(move |k| {
+            let (ia, ib) = (f + k, f + (k + 1) % n);
+            match (front, side(self.qpoint(ia), self.qpoint(ib), eye)) {
+                (true, Sign::Negative) => Some(((ia, ib), (ib, ia))),
+                (false, Sign::Positive) => Some(((ia, ib), (ia, ib))),
+                _ => None,
+            }
+        })
+    }
+
+    /// [`Tree::split`] of a range `(lo, hi)` collapsed onto one direction: the edge crossed
+    /// just before it, else just after it (at most one piece).
     fn split_collapsed(
         &self,
         eye: QueryPoint,
         m: ObjectId,
-        lo: &Dir,
-        hi: &Dir,
+        (lo, hi): (&Dir, &Dir),
         first: Boundary,
         front: bool,
     ) -> Vec<(Dir, Dir, Boundary, (usize, usize))> {
-        let Some(obj) = self.scene.object(m) else {
-            return Vec::new();
-        };
-        let (f, n) = (obj.first_vertex(), obj.len());
         let h = hi.angle.vector();
-        let edges = (0..n).filter_map(|k| {
-            let (ia, ib) = (f + k, f + (k + 1) % n);
-            let (s0, s1) = match (front, side(self.qpoint(ia), self.qpoint(ib), eye)) {
-                (true, Sign::Negative) => (ib, ia),
-                (false, Sign::Positive) => (ia, ib),
-                _ => return None,
-            };
+        let edges = self.facing_edges(eye, m, front).map(|(e, (s0, s1))| {
             let (v0, v1) = (diff(self.qpoint(s0), eye), diff(self.qpoint(s1), eye));
-            Some(((ia, ib), cross(v0, h), cross(h, v1)))
+            (e, cross(v0, h), cross(h, v1))
         });
         let before = edges.clone().find(|&(_, c0, c1)| c0 > 0 && c1 >= 0);
         let edge = before.or_else(|| edges.clone().find(|&(_, c0, c1)| c0 >= 0 && c1 > 0));
