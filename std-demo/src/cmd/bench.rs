@@ -283,7 +283,7 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
 /// The per-column work of a frame after the sweep (nothing without a camera): the interval
 /// through each column's centre and the distance along its branch, and the exact coverage
 /// of every column (summed, so that nothing is optimised away).
-fn frame<I: Interval>(
+pub(crate) fn frame<I: Interval>(
     scene: &vcx::SceneRef<'_>,
     camera: Option<&Camera>,
     intervals: &[I],
