@@ -426,3 +426,39 @@ fn tangent_law_error_table() {
     // Sanity: the laws agree at normal incidence and the tangent law bends more at grazing.
     assert!(worst > 10.0 && worst < 60.0, "{worst}");
 }
+
+/// Ray trees walk any storage: over caller slices (`Complex::as_slices`, as a complex
+/// decoded by `format::decode_into` is) they equal those over the owned complex, and a
+/// complex loaded from the binary format (the randomized construction's numbering) gives
+/// the same trees as the sweep's.
+#[test]
+fn ray_trees_over_slices_and_loaded_files_are_the_same() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let s = generate(SceneKind::Mixed, 10, 2).unwrap().scene;
+    let s = s.as_ref();
+    let c = build_by_sweep(&s).unwrap();
+    let h = vcx::partition::History::build(&s, &Default::default()).unwrap();
+    let bytes =
+        vcx::format::encode(&s, &h.complex(&s).unwrap(), None, &Default::default()).unwrap();
+    let loaded = vcx::format::decode(&bytes).unwrap().complex;
+    let key = |t: &[TreeInterval]| {
+        t.iter()
+            .map(|i| (i.branch.clone(), i.start_vertex, i.start.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    let mut compared = 0;
+    for _ in 0..scale(30) {
+        let q = random_point(&mut rng, &s);
+        for depth in [1, 3] {
+            let Ok(owned) = ray_tree(&c, &s, q, depth) else {
+                continue;
+            };
+            let slices = ray_tree(&c.as_slices(), &s, q, depth).unwrap();
+            let from_file = ray_tree(&loaded, &s, q, depth).unwrap();
+            assert_eq!(key(&owned), key(&slices), "q {q:?} depth {depth}");
+            assert_eq!(key(&owned), key(&from_file), "q {q:?} depth {depth}");
+            compared += 1;
+        }
+    }
+    assert!(compared > 20, "{compared}");
+}

@@ -28,7 +28,7 @@ use crate::geom::sos::Angle;
 use crate::geom::wide::Wide;
 use crate::geom::{Point, QueryPoint, Sign};
 use crate::line_space::{ranked, Bound, Chain};
-use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Wall};
+use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Storage, Wall};
 use crate::scene::{Material, ObjectId, SceneRef};
 
 /// One interval of a ray-tree sweep: primary directions from `start` counter-clockwise to
@@ -155,8 +155,8 @@ struct Hop {
     level: usize,
 }
 
-struct Tree<'a, 's> {
-    complex: &'a Complex,
+struct Tree<'a, 's, S: Storage> {
+    complex: &'a Complex<S>,
     scene: &'a SceneRef<'s>,
     hops: Vec<Hop>,
     branch: Vec<ObjectId>,
@@ -169,8 +169,11 @@ struct Tree<'a, 's> {
 ///
 /// Errors: `q` not free; a rounded virtual eye degenerate or out of range; an anchored
 /// walk that finds no start cylinder (a rounded range end that misses the object's sheet).
-pub fn ray_tree(
-    complex: &Complex,
+///
+/// Any storage: an owned complex, or one over caller slices (`Complex::from_slices`, e.g.
+/// decoded by `format::decode_into`); the tree itself allocates (`alloc`).
+pub fn ray_tree<S: Storage>(
+    complex: &Complex<S>,
     scene: &SceneRef<'_>,
     q: QueryPoint,
     depth: usize,
@@ -229,7 +232,7 @@ fn diff(p: QueryPoint, e: QueryPoint) -> (i128, i128) {
     )
 }
 
-impl Tree<'_, '_> {
+impl<S: Storage> Tree<'_, '_, S> {
     fn point(&self, i: usize) -> Point {
         self.scene.vertices().get(i).copied().unwrap_or_default()
     }
