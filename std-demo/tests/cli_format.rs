@@ -174,39 +174,14 @@ fn view_and_locate_agree_with_json() {
 fn bench_views_and_demo_accept_vcx() {
     let scene = example("hall");
     let file = build(&scene, &[]);
-    let j: Value = serde_json::from_str(&stdout(&vcx(&[
-        "bench",
-        "views",
-        s(&file),
-        "--random",
-        "5",
-        "--repeat",
-        "1",
-    ])))
-    .unwrap();
+    let bench = |p: &Path| -> Value {
+        let args = ["bench", "views", s(p), "--random", "5", "--repeat", "1"];
+        serde_json::from_str(&stdout(&vcx(&args))).unwrap()
+    };
+    let j = bench(&file);
     assert_eq!(j["objects"], 16);
-    let j: Value = serde_json::from_str(&stdout(&vcx(&[
-        "bench",
-        "views",
-        s(&scene),
-        "--random",
-        "5",
-        "--repeat",
-        "1",
-    ])))
-    .unwrap();
-    let cylinders = j["cylinders"].clone();
-    let j: Value = serde_json::from_str(&stdout(&vcx(&[
-        "bench",
-        "views",
-        s(&file),
-        "--random",
-        "5",
-        "--repeat",
-        "1",
-    ])))
-    .unwrap();
-    assert_eq!(j["cylinders"], cylinders);
+    let cylinders = bench(&scene)["cylinders"].clone();
+    assert_eq!(bench(&file)["cylinders"], cylinders);
     let demo = |p: &Path| {
         stdout(&vcx(&[
             "demo",

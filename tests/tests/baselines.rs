@@ -20,27 +20,18 @@ use rand_chacha::ChaCha8Rng;
 use vcx::partition::build_by_sweep;
 use vcx::render::{coverage, Camera, CoverageTable, Interval};
 use vcx::walk::ray_tree;
-use vcx::{QueryPoint, Scene, SceneRef};
+use vcx::Scene;
 use vcx_baselines::{render, BvhCaster, Prepared, Quadtree};
 use vcx_demo::generate::{generate, SceneKind};
+
+mod common;
+use common::random_point;
 
 fn example(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../std-demo/scenes")
         .join(name);
     vcx_demo::scene_file::load(&path).unwrap().scene
-}
-
-fn random_point(rng: &mut ChaCha8Rng, s: &SceneRef<'_>) -> QueryPoint {
-    let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
-    for p in s.vertices() {
-        lo = (lo.0.min(p.x()), lo.1.min(p.y()));
-        hi = (hi.0.max(p.x()), hi.1.max(p.y()));
-    }
-    let r = |rng: &mut ChaCha8Rng, a: i32, b: i32| {
-        ((rng.gen_range(a..=b) as i64) << 16) + rng.gen_range(0..1i64 << 16)
-    };
-    QueryPoint::from_raw(r(rng, lo.0, hi.0), r(rng, lo.1, hi.1)).unwrap()
 }
 
 /// Boundaries per column of the exact coverage.

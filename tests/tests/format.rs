@@ -476,30 +476,28 @@ fn every_truncation_is_an_error() {
     assert!(matches!(decode(&longer), Err(FormatError::Length { .. })));
 }
 
-#[test]
-fn every_bit_flip_is_an_error() {
-    let (_, _, bytes) = small_file();
+/// Flips every bit of `bytes` once: the checksum catches each flip (or, in the header, a
+/// check before it); then, with the checksum recomputed, the structural checks alone never
+/// panic, and a file that still decodes must pass `check` (it describes a valid complex).
+fn flip_every_bit(what: &str, bytes: &[u8], check: fn(&format::Loaded)) {
     let mut survivors = 0;
     let mut classes = std::collections::BTreeMap::<String, usize>::new();
     for i in 0..bytes.len() * 8 {
-        let mut b = bytes.clone();
+        let mut b = bytes.to_vec();
         b[i / 8] ^= 1 << (i % 8);
-        // The checksum catches every single-bit flip.
         match decode(&b) {
             Err(FormatError::Checksum { .. }) => {}
             // Flips in the magic, version, flags, parts or counts are caught before the
             // checksum is computed.
             Err(_) if i / 8 < format::HEADER_LEN => {}
-            other => panic!("bit {i}: {other:?}"),
+            other => panic!("{what}: bit {i}: {:?}", other.map(|_| "decoded")),
         }
-        // With the checksum recomputed, the structural checks alone: never a panic; a
-        // success only for bytes that still describe a valid complex.
         if i / 8 < bytes.len() - 4 {
             reseal(&mut b);
         }
         match decode(&b) {
             Ok(loaded) => {
-                check_survivor(&loaded);
+                check(&loaded);
                 survivors += 1;
             }
             Err(e) => {
@@ -510,9 +508,15 @@ fn every_bit_flip_is_an_error() {
         }
     }
     eprintln!(
-        "{} bit flips with the checksum recomputed: {survivors} still valid, errors {classes:?}",
+        "{what}: {} bit flips, checksum recomputed: {survivors} still valid, errors {classes:?}",
         bytes.len() * 8
     );
+}
+
+#[test]
+fn every_bit_flip_is_an_error() {
+    let (_, _, bytes) = small_file();
+    flip_every_bit("small file", &bytes, check_survivor);
 }
 
 #[test]
@@ -1203,36 +1207,7 @@ fn every_truncation_with_history_is_an_error() {
 #[test]
 fn every_bit_flip_with_history_is_an_error() {
     let (_, _, bytes) = small_history_file();
-    let mut survivors = 0;
-    let mut classes = std::collections::BTreeMap::<String, usize>::new();
-    for i in 0..bytes.len() * 8 {
-        let mut b = bytes.clone();
-        b[i / 8] ^= 1 << (i % 8);
-        match decode(&b) {
-            Err(FormatError::Checksum { .. }) => {}
-            Err(_) if i / 8 < format::HEADER_LEN => {}
-            other => panic!("bit {i}: {:?}", other.map(|_| "decoded")),
-        }
-        if i / 8 < bytes.len() - 4 {
-            reseal(&mut b);
-        }
-        match decode(&b) {
-            Ok(loaded) => {
-                check_history_survivor(&loaded);
-                survivors += 1;
-            }
-            Err(e) => {
-                let name = format!("{e:?}");
-                let class = name.split([' ', '(', '{']).next().unwrap_or("").to_string();
-                *classes.entry(class).or_default() += 1;
-            }
-        }
-    }
-    eprintln!(
-        "{} bit flips of a file with history, checksum recomputed: {survivors} still valid, \
-         errors {classes:?}",
-        bytes.len() * 8
-    );
+    flip_every_bit("file with history", &bytes, check_history_survivor);
 }
 
 /// A child link to an older node (a cycle in the DAG) is refused, naming the history

@@ -14,6 +14,9 @@ use vcx::{Eta, Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene}
 use vcx_demo::generate::{generate, SceneKind};
 use vcx_tests::reference::{self, RayTreeOptions, RefError, Vec2};
 
+mod common;
+use common::random_point;
+
 /// A hand-made object: its material and vertices.
 type Polygon = (Material, Vec<Point>);
 
@@ -96,27 +99,6 @@ fn check(name: &str, s: &SceneRef<'_>, c: &Complex, q: QueryPoint, depth: usize)
         }
     }
     Checked::Compared
-}
-
-fn bbox(s: &SceneRef<'_>) -> ((i32, i32), (i32, i32)) {
-    s.vertices().iter().fold(
-        ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
-        |(lo, hi), p| {
-            (
-                (lo.0.min(p.x()), lo.1.min(p.y())),
-                (hi.0.max(p.x()), hi.1.max(p.y())),
-            )
-        },
-    )
-}
-
-/// A random point of the scene's bounding box (raw query coordinates with random low bits).
-fn random_point(rng: &mut ChaCha8Rng, s: &SceneRef<'_>) -> QueryPoint {
-    let (lo, hi) = bbox(s);
-    let r = |rng: &mut ChaCha8Rng, a: i32, b: i32| {
-        ((rng.gen_range(a..=b) as i64) << 16) + rng.gen_range(0..1i64 << 16)
-    };
-    QueryPoint::from_raw(r(rng, lo.0, hi.0), r(rng, lo.1, hi.1)).unwrap()
 }
 
 fn pt(x: i32, y: i32) -> Point {

@@ -23,9 +23,12 @@ use rand_chacha::ChaCha8Rng;
 use vcx::partition::{build_by_sweep, Complex};
 use vcx::render::{centre_intervals, Camera, CoverageTable, Interval};
 use vcx::walk::{ray_tree, view};
-use vcx::{Material, ObjectId, QueryPoint, Scene, SceneRef, SubScene};
+use vcx::{Material, ObjectId, QueryPoint, Scene, SubScene};
 use vcx_demo::generate::{generate, SceneKind};
 use vcx_tests::reference::{self, cmp_angle, RayTreeOptions, Vec2};
+
+mod common;
+use common::random_point;
 
 fn scale(n: usize) -> usize {
     if std::env::var_os("VCX_LONG").is_some() {
@@ -142,26 +145,6 @@ fn compare<I: Interval>(name: &str, camera: &Camera, intervals: &[I], sweep: &Re
             assert_eq!(&dominant, want_branch, "{name} column {c}: dominant");
         }
     }
-}
-
-fn bbox(s: &SceneRef<'_>) -> ((i32, i32), (i32, i32)) {
-    s.vertices().iter().fold(
-        ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
-        |(lo, hi), p| {
-            (
-                (lo.0.min(p.x()), lo.1.min(p.y())),
-                (hi.0.max(p.x()), hi.1.max(p.y())),
-            )
-        },
-    )
-}
-
-fn random_point(rng: &mut ChaCha8Rng, s: &SceneRef<'_>) -> QueryPoint {
-    let (lo, hi) = bbox(s);
-    let r = |rng: &mut ChaCha8Rng, a: i32, b: i32| {
-        ((rng.gen_range(a..=b) as i64) << 16) + rng.gen_range(0..1i64 << 16)
-    };
-    QueryPoint::from_raw(r(rng, lo.0, hi.0), r(rng, lo.1, hi.1)).unwrap()
 }
 
 fn random_camera(rng: &mut ChaCha8Rng, q: QueryPoint, width: usize) -> Camera {
