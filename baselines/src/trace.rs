@@ -19,7 +19,9 @@ pub trait Caster {
 }
 
 fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
-    let l = v.0.hypot(v.1);
+    // The plain formula, as the complex's renderer (`vcx::render`) does: no overflow at
+    // scene magnitudes, and a hardware square root instead of `hypot`'s scaling.
+    let l = (v.0 * v.0 + v.1 * v.1).sqrt();
     (l > 0.0 && l.is_finite()).then(|| (v.0 / l, v.1 / l))
 }
 

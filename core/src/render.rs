@@ -331,6 +331,51 @@ impl Interval for TreeInterval {
     }
 }
 
+/// A direction to place among interval starts: exact, with its angle in radians for the
+/// starts known in `f64` only (computed once, not per comparison).
+struct Probe {
+    angle: Angle,
+    radians: f64,
+}
+
+impl Probe {
+    fn new(angle: Angle) -> Probe {
+        Probe {
+            radians: angle.radians(),
+            angle,
+        }
+    }
+
+    /// Whether interval `i` starts at or before the probe (exactly when the start is
+    /// exact, in `f64` otherwise).
+    fn after_start<I: Interval>(&self, i: &I) -> bool {
+        match i.exact_start() {
+            Some(s) => s.cmp_exact(&self.angle) != Ordering::Greater,
+            None => i.start_radians() <= self.radians,
+        }
+    }
+
+    /// Whether interval `k` contains the probe: it starts at or before it and the next one
+    /// after it; the last interval wraps through θ = 0.
+    fn within<I: Interval>(&self, intervals: &[I], k: usize) -> bool {
+        let starts = |i: usize| intervals.get(i).is_some_and(|x| self.after_start(x));
+        if k + 1 < intervals.len() {
+            starts(k) && !starts(k + 1)
+        } else {
+            starts(k) || !starts(0)
+        }
+    }
+
+    fn find<I: Interval>(&self, intervals: &[I]) -> usize {
+        let p = intervals.partition_point(|s| self.after_start(s));
+        if p == 0 {
+            intervals.len().saturating_sub(1)
+        } else {
+            p - 1
+        }
+    }
+}
+
 /// Order of interval `i`'s start against the exact direction `a` (exactly when the start
 /// is exact, in `f64` otherwise).
 fn start_cmp<I: Interval>(i: &I, a: &Angle) -> Ordering {
@@ -344,12 +389,7 @@ fn start_cmp<I: Interval>(i: &I, a: &Angle) -> Ordering {
 /// one whose start is not after `a`, or the last interval (which wraps through θ = 0).
 /// A direction exactly on a boundary belongs to the interval starting there.
 pub fn interval_at<I: Interval>(intervals: &[I], a: &Angle) -> usize {
-    let p = intervals.partition_point(|s| start_cmp(s, a) != Ordering::Greater);
-    if p == 0 {
-        intervals.len().saturating_sub(1)
-    } else {
-        p - 1
-    }
+    Probe::new(*a).find(intervals)
 }
 
 /// One piece of a column: the part from image coordinate `from` to `to` sees `interval`.
@@ -443,9 +483,26 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
 
 /// The interval seen through the centre of each column (exactly, see [`interval_at`]),
 /// written into `out` (its first `min(out.len(), width)` columns).
+///
+/// Columns run clockwise, so the interval of the next column is the same one or an
+/// earlier one: each column first tries those two (two comparisons each), and searches
+/// by bisection only when neither holds it. O(W + intervals) for a frame.
 pub fn centre_intervals<I: Interval>(camera: &Camera, intervals: &[I], out: &mut [usize]) {
+    let n = intervals.len();
+    if n == 0 {
+        out.iter_mut().for_each(|s| *s = 0);
+        return;
+    }
+    let mut k = None;
     for (c, slot) in out.iter_mut().enumerate().take(camera.width) {
-        *slot = interval_at(intervals, &camera.centre(c).angle());
+        let p = Probe::new(camera.centre(c).angle());
+        let found = match k {
+            Some(k) if p.within(intervals, k) => k,
+            Some(k) if p.within(intervals, (k + n - 1) % n) => (k + n - 1) % n,
+            _ => p.find(intervals),
+        };
+        *slot = found;
+        k = Some(found);
     }
 }
 
@@ -637,7 +694,7 @@ fn unit_normal(poly: &[crate::Point], k: usize) -> Option<((f64, f64), (f64, f64
     let n = poly.len();
     let (a, b) = (poly.get(k)?.to_f64(), poly.get((k + 1) % n)?.to_f64());
     let (nx, ny) = (b.1 - a.1, a.0 - b.0);
-    let l = libm::hypot(nx, ny);
+    let l = norm(nx, ny);
     (l > 0.0).then_some((a, (nx / l, ny / l)))
 }
 
@@ -651,7 +708,7 @@ pub fn hit_along(
     dir: (f64, f64),
     branch: &[ObjectId],
 ) -> Option<Hit> {
-    let l = libm::hypot(dir.0, dir.1);
+    let l = norm(dir.0, dir.1);
     if branch.is_empty() || l <= 0.0 {
         return None;
     }
@@ -701,7 +758,15 @@ pub fn hit_along(
     })
 }
 
+/// `|(x, y)|` for output: the components stay far below 2⁵¹¹ (scene coordinates and
+/// their differences), so the plain formula cannot overflow, and it is a hardware square
+/// root where `hypot`'s scaling is a slow software routine (a frame calls it per column
+/// and level).
+fn norm(x: f64, y: f64) -> f64 {
+    libm::sqrt(x * x + y * y)
+}
+
 fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
-    let l = libm::hypot(v.0, v.1);
+    let l = norm(v.0, v.1);
     (l > 0.0 && l.is_finite()).then(|| (v.0 / l, v.1 / l))
 }

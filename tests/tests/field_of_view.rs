@@ -69,10 +69,14 @@ fn restrict(full: &[reference::Interval<Option<ObjectId>>], from: &Vec2, to: &Ve
             None
         },
     )];
-    for j in 1..n {
+    // Around to the containing interval's own start (the full circle), unless on `from`.
+    for j in 1..=n {
         let i = &full[(k + j) % n];
         let l = lap(&i.start);
-        if !(l < lap_to || (l == lap_to && angle_cmp(&i.start, to) == Less)) {
+        if n == 1
+            || (j == n && on_from)
+            || !(l < lap_to || (l == lap_to && angle_cmp(&i.start, to) == Less))
+        {
             break;
         }
         rows.push((

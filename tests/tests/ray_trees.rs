@@ -444,3 +444,145 @@ fn ray_trees_over_slices_and_loaded_files_are_the_same() {
     }
     assert!(compared > 20, "{compared}");
 }
+
+/// `ray_tree_range` is exactly the restriction of the full tree (itself judged against the
+/// reference above) to the range: ends at random directions, on exact primary boundaries
+/// (the tree's own), along scene vertices, and the full circle. Deep boundaries carry
+/// `f64` angles only: a range end within 10⁻⁹ rad of one is skipped as undecidable here.
+#[test]
+fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
+    use vcx::geom::predicates::Direction;
+    use vcx::walk::ray_tree_range;
+    let tau = core::f64::consts::TAU;
+    let mut rng = ChaCha8Rng::seed_from_u64(33);
+    let (mut compared, mut on_boundary, mut skipped) = (0, 0, 0);
+    for (kind, n, seed) in [
+        (SceneKind::Hall, 4, 1),
+        (SceneKind::Mixed, 10, 2),
+        (SceneKind::Mixed, 16, 5),
+    ] {
+        let s = generate(kind, n, seed).unwrap().scene;
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        for _ in 0..scale(12) {
+            let q = random_point(&mut rng, &s);
+            for depth in [1, 3, 5] {
+                let Ok(full) = ray_tree(&c, &s, q, depth) else {
+                    continue;
+                };
+                let exact: Vec<_> = full.iter().filter_map(|i| i.exact_start).collect();
+                for case in 0..6 {
+                    let random = |rng: &mut ChaCha8Rng| loop {
+                        let v = (
+                            rng.gen_range(-1 << 20..1 << 20),
+                            rng.gen_range(-1 << 20..1 << 20),
+                        );
+                        if let Some(d) = Direction::new(v.0, v.1) {
+                            break d;
+                        }
+                    };
+                    let toward = |rng: &mut ChaCha8Rng| {
+                        let v = s.vertices()[rng.gen_range(0..s.vertices().len())].to_query();
+                        Direction::new(v.x() - q.x(), v.y() - q.y())
+                    };
+                    let from = match case {
+                        0 | 1 => Some(random(&mut rng)),
+                        2 | 3 if !exact.is_empty() => {
+                            let (x, y) = exact[rng.gen_range(0..exact.len())].vector();
+                            Direction::new(x as i64, y as i64)
+                        }
+                        _ => toward(&mut rng),
+                    };
+                    let to = match case {
+                        1 | 3 => from,
+                        _ if rng.gen_bool(0.5) => toward(&mut rng),
+                        _ => Some(random(&mut rng)),
+                    };
+                    let (Some(from), Some(to)) = (from, to) else {
+                        continue;
+                    };
+                    let (fa, ta) = (
+                        vcx::geom::sos::Angle::constant(from),
+                        vcx::geom::sos::Angle::constant(to),
+                    );
+                    let (fr, tr) = (fa.radians(), ta.radians());
+                    let rel_t = if fa.cmp_exact(&ta).is_eq() {
+                        tau
+                    } else {
+                        (tr - fr).rem_euclid(tau)
+                    };
+                    // Position counter-clockwise from `from`, exact where the start is.
+                    let rel = |i: &TreeInterval| -> Option<f64> {
+                        match i.exact_start {
+                            Some(a) if a.cmp_exact(&fa).is_eq() => Some(0.0),
+                            Some(a) if a.cmp_exact(&ta).is_eq() => Some(rel_t),
+                            _ if i.exact_start.is_none()
+                                && (angle_close(i.start, fr) || angle_close(i.start, tr)) =>
+                            {
+                                None
+                            }
+                            _ => Some((i.start - fr).rem_euclid(tau)),
+                        }
+                    };
+                    let rels: Option<Vec<f64>> = full.iter().map(rel).collect();
+                    let Some(rels) = rels else {
+                        skipped += 1;
+                        continue;
+                    };
+                    // The full tree's interval containing `from`, then the ones inside.
+                    let mut want: Vec<(Vec<ObjectId>, Option<usize>)> = Vec::new();
+                    if full.len() == 1 {
+                        want.push((full[0].branch.clone(), None));
+                    } else {
+                        let k0 = (0..full.len())
+                            .max_by(|&a, &b| {
+                                let key = |k: usize| if rels[k] == 0.0 { tau } else { rels[k] };
+                                key(a).total_cmp(&key(b))
+                            })
+                            .unwrap();
+                        if rels[k0] == 0.0 {
+                            on_boundary += 1;
+                        }
+                        let v0 = (rels[k0] == 0.0).then_some(full[k0].start_vertex).flatten();
+                        want.push((full[k0].branch.clone(), v0));
+                        // Around to the containing interval's own start, unless on `from`.
+                        for j in 1..=full.len() {
+                            let k = (k0 + j) % full.len();
+                            let r = if j == full.len() && rels[k] == 0.0 {
+                                tau
+                            } else {
+                                rels[k]
+                            };
+                            if !(r < rel_t) {
+                                break;
+                            }
+                            want.push((full[k].branch.clone(), full[k].start_vertex));
+                        }
+                    }
+                    let mut got = ray_tree_range(&c, &s, q, depth, from, to).unwrap();
+                    let first = got
+                        .iter()
+                        .position(|i| i.exact_start.is_some_and(|a| a.cmp_exact(&fa).is_eq()))
+                        .expect("an interval starts at `from`");
+                    got.rotate_left(first);
+                    let got: Vec<_> = got
+                        .iter()
+                        .map(|i| (i.branch.clone(), i.start_vertex))
+                        .collect();
+                    assert_eq!(
+                        got, want,
+                        "q {q:?} depth {depth} from {from:?} to {to:?}\n full {full:?}"
+                    );
+                    compared += 1;
+                }
+            }
+        }
+    }
+    eprintln!(
+        "ranges compared {compared}, starting on a boundary {on_boundary}, skipped {skipped}"
+    );
+    assert!(
+        compared > 300 && on_boundary > 20,
+        "{compared} {on_boundary}"
+    );
+}

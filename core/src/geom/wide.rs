@@ -118,6 +118,22 @@ impl Wide {
         self.add(&o.neg())
     }
 
+    /// `self mod P` for the prime `P = 2⁶¹ − 1`, in `[0, P)`: equal products have equal
+    /// residues, so different residues prove a product nonzero without computing it.
+    pub(crate) fn residue(&self) -> u64 {
+        // 2⁶⁴ ≡ 2³ (mod 2⁶¹ − 1): Horner from the top limb.
+        let r = self
+            .mag
+            .iter()
+            .rev()
+            .fold(0u64, |r, &l| mod_p((u128::from(r) << 64) + u128::from(l)));
+        if self.negative && r != 0 {
+            P - r
+        } else {
+            r
+        }
+    }
+
     /// `u.0 · v.1 − u.1 · v.0`.
     pub(crate) fn cross(u: (Wide, Wide), v: (i128, i128)) -> Option<Wide> {
         u.0.mul_i128(v.1)?.sub(&u.1.mul_i128(v.0)?)
@@ -143,6 +159,32 @@ impl Ord for Wide {
 impl PartialOrd for Wide {
     fn partial_cmp(&self, o: &Wide) -> Option<Ordering> {
         Some(self.cmp(o))
+    }
+}
+
+/// The Mersenne prime 2⁶¹ − 1 of [`Wide::residue`].
+pub(crate) const P: u64 = (1 << 61) - 1;
+
+/// `x mod P` for any `x < 2¹²⁸` (folding: `2⁶¹ ≡ 1`).
+pub(crate) fn mod_p(x: u128) -> u64 {
+    let p = u128::from(P);
+    let x = (x & p) + (x >> 61); // < 2⁶¹ + 2⁶⁷
+    let x = (x & p) + (x >> 61); // < 2⁶¹ + 2⁷
+    let x = x as u64;
+    if x >= P {
+        x - P
+    } else {
+        x
+    }
+}
+
+/// `v mod P` of a signed 128-bit integer, in `[0, P)`.
+pub(crate) fn residue_i128(v: i128) -> u64 {
+    let r = mod_p(v.unsigned_abs());
+    if v < 0 && r != 0 {
+        P - r
+    } else {
+        r
     }
 }
 
@@ -210,6 +252,42 @@ mod tests {
             );
             assert_eq!(ab.neg().mul_i128(-k1), ab.mul_i128(k1));
         }
+    }
+
+    /// Residues modulo 2⁶¹ − 1 agree with `i128` arithmetic and with products far beyond it
+    /// (`(a·b)·c mod P = a·b·c mod P`), signs included, and at the edges of the fold.
+    #[test]
+    fn residues_agree_with_arithmetic() {
+        let m = |a: u64, b: u64| mod_p(u128::from(a) * u128::from(b));
+        let p = P as i128;
+        for v in [
+            0i128,
+            1,
+            -1,
+            p - 1,
+            p,
+            p + 1,
+            -p,
+            i128::MAX,
+            i128::MIN + 1,
+            1 << 100,
+        ] {
+            assert_eq!(w(v).residue(), v.rem_euclid(p) as u64, "{v}");
+            assert_eq!(residue_i128(v), v.rem_euclid(p) as u64, "{v}");
+        }
+        assert_eq!(mod_p(u128::MAX), (u128::MAX % u128::from(P)) as u64);
+        let (a, b, c) = (i128::MAX - 5, -(1i128 << 90) + 7, (1i128 << 126) + 3);
+        let abc = w(a).mul_i128(b).unwrap().mul_i128(c).unwrap();
+        let r = m(m(residue_i128(a), residue_i128(b)), residue_i128(c));
+        assert_eq!(abc.residue(), r);
+        assert_eq!(abc.neg().residue(), (P - r) % P);
+        // The full-width all-ones magnitude: 2¹⁰²⁴ − 1 ≡ 2⁴⁸ − 1 (1024 = 16·61 + 48 and
+        // 2⁶¹ ≡ 1).
+        let ones = Wide {
+            negative: false,
+            mag: [u64::MAX; LIMBS],
+        };
+        assert_eq!(ones.residue(), (1 << 48) - 1);
     }
 
     /// The extremes: (2¹²⁷ − 1)⁸ < 2¹⁰¹⁶ fits, one more factor overflows; carries run

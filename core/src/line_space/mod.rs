@@ -118,12 +118,24 @@ pub fn tangents_from(
         return (out, 0);
     };
     let (first, n) = (obj.first_vertex(), obj.len());
+    if n == 0 {
+        return (out, 0);
+    }
+    // Side of the neighbours w.r.t. the line q → h: orient(q, h, x) = orient(h, x, q). Each
+    // edge's sign is computed once: orient(h, prev, q) = −orient(prev, h, q), the previous
+    // vertex's `sn` (the perturbed determinant changes sign with a swap like the exact one).
+    let edge = |k: usize| {
+        orient_query(
+            ranked(scene, first + k % n),
+            ranked(scene, first + (k + 1) % n),
+            q,
+        )
+    };
+    let mut sn_prev = edge(n + n - 1);
     for k in 0..n {
-        let h = ranked(scene, first + k);
-        let prev = ranked(scene, first + (k + n - 1) % n);
-        let next = ranked(scene, first + (k + 1) % n);
-        // Side of the neighbours w.r.t. the line q → h: orient(q, h, x) = orient(h, x, q).
-        let (sp, sn) = (orient_query(h, prev, q), orient_query(h, next, q));
+        let sn = edge(k);
+        let sp = sn_prev.flip();
+        sn_prev = sn;
         if sp == sn {
             let bound = if sn == Sign::Positive {
                 Bound::Lower

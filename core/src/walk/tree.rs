@@ -19,13 +19,14 @@
 //!
 //! Leaves come out in primary angular order; neighbours with equal branches are merged.
 
+use alloc::rc::Rc;
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
 use super::{optics, Anchor, Position, WalkError};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
-use crate::geom::wide::Wide;
+use crate::geom::wide::{mod_p, residue_i128, Wide};
 use crate::geom::{Point, QueryPoint, Sign};
 use crate::line_space::{ranked, Bound, Chain};
 use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Storage, Wall};
@@ -51,7 +52,7 @@ pub struct TreeInterval {
 
 /// A range end: a direction from an eye, with the vertex it points at (and whether that
 /// vertex is ahead of the eye) when it is the direction of an eye–vertex pair.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Dir {
     angle: Angle,
     vertex: Option<(usize, bool)>,
@@ -59,8 +60,9 @@ struct Dir {
     /// rounded): the exact direction, so that events and vertices exactly on it are
     /// classified exactly (a vertex exactly on a mapped range end is a frequent
     /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`). `None` past `Wide`'s
-    /// budget.
-    exact: Option<(Wide, Wide)>,
+    /// budget. Shared, not copied: a `Wide` pair is 272 bytes, and range ends are moved
+    /// around a lot.
+    exact: Option<Rc<(Wide, Wide)>>,
 }
 
 impl Dir {
@@ -75,7 +77,7 @@ impl Dir {
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly.
     fn turn(&self, v: (i128, i128)) -> Sign {
-        match self.exact.and_then(|x| Wide::cross(x, v)) {
+        match self.exact.as_deref().and_then(|x| Wide::cross(*x, v)) {
             Some(c) => c.sign(),
             None => Sign::of_i128(cross(self.angle.vector(), v)),
         }
@@ -107,7 +109,7 @@ impl Dir {
 /// one per hop), the first one whose ray, beyond its origin, holds a vertex of the object
 /// that stage hits on either side; the vertex nearest to that stage's eye. Every stage is
 /// tested exactly, earlier ones on the boundary direction mapped back through the hops in
-/// 1024-bit integers ([`Tree::map_dir_exact`], up to 9 hops); beyond that in `f64` with a
+/// 1024-bit integers ([`Tree::map_hop_exact`], up to 9 hops); beyond that in `f64` with a
 /// relative tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
 /// `boundary_vertex_mirror_corner.rs`).
 #[derive(Clone, Debug)]
@@ -131,6 +133,7 @@ struct Boundary {
 }
 
 /// An exact open range of directions from an eye with the object seen over it.
+#[derive(Clone)]
 struct Piece {
     from: Dir,
     to: Dir,
@@ -178,29 +181,226 @@ pub fn ray_tree<S: Storage>(
     q: QueryPoint,
     depth: usize,
 ) -> Result<Vec<TreeInterval>, WalkError> {
+    sweep(complex, scene, q, depth, None)
+}
+
+/// The ray trees restricted to the primary directions counter-clockwise from `from` to
+/// `to` (a field of view; `from == to` is the full circle starting at `from`), as
+/// [`crate::walk::view_range`] restricts a view: the interval containing `from` starts at
+/// `from` — its `start_vertex` is `None` unless a boundary of the full tree lies exactly on
+/// `from` — and the others are the full tree's intervals whose start lies strictly inside
+/// the range; a boundary exactly on `to` is left out. Sorted by start angle like
+/// [`ray_tree`] (so a range through θ = 0 wraps), which is what [`crate::render`] takes.
+///
+/// Only the primary pieces inside the range are followed through mirrors, refractive
+/// objects and screens, so the secondary work is that of the field of view; the primary
+/// walk is the full one (starting it at `from` needs point location in a history).
+pub fn ray_tree_range<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    depth: usize,
+    from: Direction,
+    to: Direction,
+) -> Result<Vec<TreeInterval>, WalkError> {
+    sweep(complex, scene, q, depth, Some((from, to)))
+}
+
+fn sweep<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    depth: usize,
+    range: Option<(Direction, Direction)>,
+) -> Result<Vec<TreeInterval>, WalkError> {
     let mut tree = Tree {
         complex,
         scene,
         hops: Vec::new(),
         branch: Vec::new(),
     };
-    let mut leaves = Vec::new();
-    match tree.primary(q)? {
-        Ok(pieces) => {
-            for p in pieces {
-                tree.piece(q, depth, p, &mut leaves)?;
-            }
-        }
+    let range = range.map(|(f, t)| (Angle::constant(f), Angle::constant(t)));
+    let pieces = match tree.primary(q)? {
+        Ok(pieces) => pieces,
         Err(object) => {
             return Ok(alloc::vec![TreeInterval {
-                start: 0.0,
-                exact_start: None,
+                start: range.map_or(0.0, |r| r.0.radians()),
+                exact_start: range.map(|r| r.0),
                 branch: object.into_iter().collect(),
                 start_vertex: None,
             }])
         }
+    };
+    let mut leaves = Vec::new();
+    let Some((f, t)) = range else {
+        for p in pieces {
+            tree.piece(q, depth, p, &mut leaves)?;
+        }
+        return Ok(tree.assemble(&leaves));
+    };
+    let (context, inside) = tree.clip(q, pieces, f, t);
+    // A boundary exactly on `from` is resolved against the last leaf before it.
+    let mut before = Vec::new();
+    if let Some(p) = context {
+        tree.piece(q, depth, p, &mut before)?;
     }
-    Ok(tree.assemble(&leaves))
+    for p in inside {
+        tree.piece(q, depth, p, &mut leaves)?;
+    }
+    let mut out: Vec<TreeInterval> = Vec::new();
+    let mut prev = before.last().map(|l| &l.branch);
+    for (i, leaf) in leaves.iter().enumerate() {
+        let start_vertex = match prev {
+            // Inside the range, equal neighbours merge; the first interval starts at `from`
+            // even where the full tree has no boundary.
+            Some(left) if *left == leaf.branch && i > 0 => continue,
+            Some(left) if *left != leaf.branch => {
+                tree.resolve(&leaf.boundary.rule, left, &leaf.branch)
+            }
+            _ => None,
+        };
+        out.push(TreeInterval {
+            start: if i == 0 {
+                f.radians()
+            } else {
+                leaf.boundary.radians
+            },
+            exact_start: if i == 0 { Some(f) } else { leaf.boundary.exact },
+            branch: leaf.branch.clone(),
+            start_vertex,
+        });
+        prev = Some(&leaf.branch);
+    }
+    out.sort_by(|a, b| a.start.total_cmp(&b.start));
+    Ok(out)
+}
+
+impl<S: Storage> Tree<'_, '_, S> {
+    /// The primary pieces (cyclic, in angular order) restricted to the range from `f`
+    /// counter-clockwise to `t` (the full circle if equal), in order from `f`, the first
+    /// starting at `f` and the last ending at `t`; and the left side of `f` when a boundary
+    /// of the full tree may lie exactly on `f`: the piece before when a piece starts there,
+    /// else the containing piece up to `f` when a vertex that can cause a primary-level
+    /// boundary (one of the piece's object, or any behind a screen) lies on the ray.
+    fn clip(
+        &self,
+        q: QueryPoint,
+        pieces: Vec<Piece>,
+        f: Angle,
+        t: Angle,
+    ) -> (Option<Piece>, Vec<Piece>) {
+        let n = pieces.len();
+        // Position counter-clockwise from `f`: (lap, angle), lap 1 for directions before `f`.
+        let lap = |a: &Angle| u8::from(a.cmp_exact(&f) == Ordering::Less);
+        let before = |(la, a): (u8, &Angle), (lb, b): (u8, &Angle)| {
+            la < lb || (la == lb && a.cmp_exact(b) == Ordering::Less)
+        };
+        let end = (
+            if t.cmp_exact(&f) == Ordering::Greater {
+                0
+            } else {
+                1
+            },
+            &t,
+        );
+        // The piece containing `f`: the last one starting at or before it, else the last one
+        // (it wraps through θ = 0).
+        let k0 = pieces
+            .iter()
+            .rposition(|p| p.from.angle.cmp_exact(&f) != Ordering::Greater)
+            .unwrap_or(n.saturating_sub(1));
+        let at = |f: Angle| Dir {
+            angle: f,
+            vertex: None,
+            exact: None,
+        };
+        let on_f = pieces
+            .get(k0)
+            .is_some_and(|p| p.from.angle.cmp_exact(&f) == Ordering::Equal);
+        let context = if on_f {
+            pieces.get((k0 + n - 1) % n).cloned()
+        } else {
+            pieces
+                .get(k0)
+                .filter(|p| self.vertex_on_ray(q, &f, p.ceiling))
+                .map(|p| Piece {
+                    to: at(f),
+                    ..p.clone()
+                })
+        };
+        // Where the `j`-th piece from `k0` starts (j ≤ n; the n-th is `k0` again, on lap 1
+        // unless it starts after `f`), counter-clockwise from `f`.
+        let pos = |j: usize| -> (u8, &Angle) {
+            match pieces.get((k0 + j) % n).map(|p| &p.from.angle) {
+                Some(a) if j == 0 => (0, a),
+                Some(a) if j < n => (lap(a), a),
+                Some(a) if j == n => (lap(a).max(u8::from(on_f)), a),
+                _ => (2, &f),
+            }
+        };
+        let mut out: Vec<Piece> = Vec::new();
+        for j in 0..=n {
+            let Some(mut p) = pieces.get((k0 + j) % n).cloned() else {
+                break;
+            };
+            if j > 0 && !before(pos(j), end) {
+                break;
+            }
+            if j == 0 && !on_f {
+                p.from = at(f);
+                p.boundary = Boundary {
+                    radians: f.radians(),
+                    exact: Some(f),
+                    rule: Rule {
+                        hops: Vec::new(),
+                        eye: q,
+                        dir: f.vector(),
+                        level: 0,
+                        fallback: None,
+                    },
+                };
+            }
+            let last = !before(pos(j + 1), end);
+            if last {
+                p.to = at(t);
+            }
+            out.push(p);
+            if last {
+                break;
+            }
+        }
+        (context, out)
+    }
+
+    /// Whether a vertex of `object` lies exactly on the line through `eye` with the
+    /// direction of `a`. Bit budget: |a| ≤ 2⁶³, |v − eye| ≤ 2⁵⁴: products < 2¹¹⁸.
+    fn vertex_on_line(&self, eye: QueryPoint, a: &Angle, object: ObjectId) -> bool {
+        let d = a.vector();
+        self.scene.object(object).is_some_and(|o| {
+            (o.first_vertex()..o.first_vertex() + o.len())
+                .any(|v| cross(d, diff(self.qpoint(v), eye)) == 0)
+        })
+    }
+
+    /// Whether a vertex that can make a primary-level boundary lies exactly on the ray from
+    /// `q` at `f`: one of `ceiling` (mirror and refraction splits), or any vertex if
+    /// `ceiling` is a screen (events of the walk behind it).
+    fn vertex_on_ray(&self, q: QueryPoint, f: &Angle, ceiling: Option<ObjectId>) -> bool {
+        let Some(obj) = ceiling.and_then(|c| self.scene.object(c)) else {
+            return false;
+        };
+        let range = if obj.material == Material::Screen {
+            0..self.scene.vertices().len()
+        } else {
+            obj.first_vertex()..obj.first_vertex() + obj.len()
+        };
+        let d = f.vector();
+        // Bit budget: |d| ≤ 2⁶³, |v − q| ≤ 2⁵⁴: products < 2¹¹⁸, exact in `i128`.
+        range.into_iter().any(|v| {
+            let w = diff(self.qpoint(v), q);
+            cross(d, w) == 0 && d.0 * w.0 + d.1 * w.1 > 0
+        })
+    }
 }
 
 fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
@@ -285,7 +485,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
             let after = events[j - 1].1;
             if after != seen {
-                clusters.push((events[i].0, events[j - 1].0, after));
+                clusters.push((events[i].0.clone(), events[j - 1].0.clone(), after));
                 seen = after;
             }
             i = j;
@@ -296,10 +496,10 @@ impl<S: Storage> Tree<'_, '_, S> {
         let n = clusters.len();
         Ok(Ok((0..n)
             .map(|k| {
-                let (first, last, after) = clusters[k];
+                let (first, last, after) = clusters[k].clone();
                 Piece {
                     from: last,
-                    to: clusters[(k + 1) % n].0,
+                    to: clusters[(k + 1) % n].0.clone(),
                     ceiling: after,
                     boundary: self.event_boundary(q, &first),
                 }
@@ -432,15 +632,17 @@ impl<S: Storage> Tree<'_, '_, S> {
         let exact = (|| {
             let d = end
                 .exact
+                .as_deref()
+                .copied()
                 .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
             let den = Wide::cross(d, e)?;
             let num = cross(diff(a, hop.prev), e);
             let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
             let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
             match den.sign() {
-                Sign::Negative => Some((x.neg(), y.neg())),
+                Sign::Negative => Some(Rc::new((x.neg(), y.neg()))),
                 Sign::Zero => None,
-                Sign::Positive => Some((x, y)),
+                Sign::Positive => Some(Rc::new((x, y))),
             }
         })();
         Ok(Dir {
@@ -472,7 +674,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             } else {
                 b
             };
-            return Ok((keep, keep));
+            return Ok((keep.clone(), keep));
         }
         Ok((a, b))
     }
@@ -537,7 +739,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         // perturbation puts just below 2π starts the walk at θ = 0 instead.
         let mut theta = if wraps(angle) { Angle::ZERO } else { *angle };
         for chain in [c.bottom, c.top].into_iter().flatten() {
-            if chain.object == m {
+            // Only a vertex exactly on the opening line can make a tangent exactly on it.
+            if chain.object == m || !self.vertex_on_line(eye, angle, chain.object) {
                 continue;
             }
             let (tangents, count) = crate::line_space::tangents_from(self.scene, chain.object, eye);
@@ -662,8 +865,8 @@ impl<S: Storage> Tree<'_, '_, S> {
                 r => r?,
             };
             return Ok(alloc::vec![Piece {
-                from: *from,
-                to: *to,
+                from: from.clone(),
+                to: to.clone(),
                 ceiling: self.complex.ceiling(id),
                 boundary: first,
             }]);
@@ -696,7 +899,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         )?;
         let mut seen = self.complex.ceiling(start);
         let mut pieces = Vec::new();
-        let (mut cur_from, mut cur_boundary, mut end) = (*from, first, *to);
+        let (mut cur_from, mut cur_boundary, mut end) = (from.clone(), first, to.clone());
         let mut i = 0;
         while i < events.len() {
             let mut j = i + 1;
@@ -705,11 +908,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             {
                 j += 1;
             }
-            let d = events[i].0;
+            let d = &events[i].0;
             match to.place(&d.angle, Ordering::Less) {
                 // On the closing ray: not inside the open range.
                 Ordering::Equal => {
-                    end = d;
+                    end = d.clone();
                     break;
                 }
                 // Past the exact end, before the rounded one.
@@ -723,17 +926,17 @@ impl<S: Storage> Tree<'_, '_, S> {
                 // part of the state at the start.
                 seen = after;
                 if opening == Ordering::Equal {
-                    cur_from = events[j - 1].0;
+                    cur_from = events[j - 1].0.clone();
                 }
             } else if after != seen {
                 pieces.push(Piece {
                     from: cur_from,
-                    to: d,
+                    to: d.clone(),
                     ceiling: seen,
                     boundary: cur_boundary,
                 });
-                cur_from = events[j - 1].0;
-                cur_boundary = self.event_boundary(eye, &d);
+                cur_from = events[j - 1].0.clone();
+                cur_boundary = self.event_boundary(eye, d);
                 seen = after;
             }
             i = j;
@@ -772,12 +975,12 @@ impl<S: Storage> Tree<'_, '_, S> {
             let (start, boundary, sv) = if lo.turn(v0) == Sign::Positive {
                 (self.toward(eye, s0), self.split_boundary(eye, s0), Some(v0))
             } else {
-                (*lo, first.clone(), None)
+                (lo.clone(), first.clone(), None)
             };
             let (end, ev) = if hi.turn(v1) == Sign::Negative {
                 (self.toward(eye, s1), Some(v1))
             } else {
-                (*hi, None)
+                (hi.clone(), None)
             };
             let nonempty = match (sv, ev) {
                 (Some(a), Some(b)) => cross(a, b) > 0,
@@ -836,7 +1039,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         });
         let before = edges.clone().find(|&(_, c0, c1)| c0 > 0 && c1 >= 0);
         let edge = before.or_else(|| edges.clone().find(|&(_, c0, c1)| c0 >= 0 && c1 > 0));
-        edge.map(|(e, _, _)| (*lo, *hi, first, e))
+        edge.map(|(e, _, _)| (lo.clone(), hi.clone(), first, e))
             .into_iter()
             .collect()
     }
@@ -1058,6 +1261,16 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     fn resolve(&self, rule: &Rule, left: &[ObjectId], right: &[ObjectId]) -> Option<usize> {
         let stages = rule.hops.len();
+        // The boundary direction at every earlier stage, mapped back hop by hop once.
+        let mut mapped: Vec<Option<(Wide, Wide)>> = alloc::vec![None; stages];
+        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
+        for st in (0..stages).rev() {
+            let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
+            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, d));
+            if let Some(slot) = mapped.get_mut(st) {
+                *slot = d;
+            }
+        }
         for st in 0..=stages {
             let (eye, level, origin) = match st.checked_sub(1).and_then(|i| rule.hops.get(i)) {
                 None => (rule.hops.first().map_or(rule.eye, |h| h.prev), 0, None),
@@ -1081,17 +1294,28 @@ impl<S: Storage> Tree<'_, '_, S> {
                     })
                 });
             let hops = rule.hops.get(st..).unwrap_or(&[]);
-            let best = match self.map_dir_exact(hops, rule.eye, rule.dir) {
+            let best = match mapped.get(st).copied().flatten() {
                 // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
                 _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
                     (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
                 }),
-                Some(d) => nearest_on_ray(candidates, |v| {
-                    let w = diff(self.qpoint(v), eye);
-                    let along = Wide::dot(d, w)?;
-                    (Wide::cross(d, w)?.sign() == Sign::Zero).then_some(along)
-                }),
+                Some(d) => {
+                    let (r0, r1) = (d.0.residue(), d.1.residue());
+                    nearest_on_ray(candidates, |v| {
+                        let w = diff(self.qpoint(v), eye);
+                        // Different residues modulo 2⁶¹ − 1 prove `cross(d, w) ≠ 0`
+                        // exactly, without the 1024-bit products.
+                        let m =
+                            |a: u64, b: i128| mod_p(u128::from(a) * u128::from(residue_i128(b)));
+                        if m(r0, w.1) != m(r1, w.0) {
+                            return None;
+                        }
+                        (Wide::cross(d, w)?.sign() == Sign::Zero)
+                            .then(|| Wide::dot(d, w))
+                            .flatten()
+                    })
+                }
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
                     let d = self.map_dir(hops, rule.eye, rule.dir);
@@ -1111,46 +1335,36 @@ impl<S: Storage> Tree<'_, '_, S> {
         rule.fallback
     }
 
-    /// [`Tree::map_dir`] exactly: the direction scaled by the hit's denominator at every
-    /// hop, `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one
-    /// of at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a
-    /// 54-bit direction fit and the final cross with a query difference too.
-    fn map_dir_exact(
-        &self,
-        hops: &[Hop],
-        eye: QueryPoint,
-        dir: (i128, i128),
-    ) -> Option<(Wide, Wide)> {
-        let mut d = (Wide::from_i128(dir.0), Wide::from_i128(dir.1));
-        let mut cur = eye;
-        for hop in hops.iter().rev() {
-            let a = self.qpoint(hop.a);
-            let e = diff(self.qpoint(hop.b), a);
-            let den = Wide::cross(d, e)?;
-            d = match den.sign() {
-                // Along the edge's line: its midpoint, as `map_dir`.
-                Sign::Zero => {
-                    let ap = diff(a, hop.prev);
-                    (
-                        Wide::from_i128(2 * ap.0 + e.0),
-                        Wide::from_i128(2 * ap.1 + e.1),
-                    )
+    /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `cur` (the eye after
+    /// `hop`) mapped back to a direction from `hop.prev`, scaled by the hit's denominator;
+    /// `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one of
+    /// at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a 54-bit
+    /// direction fit and the final cross with a query difference too.
+    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: (Wide, Wide)) -> Option<(Wide, Wide)> {
+        let a = self.qpoint(hop.a);
+        let e = diff(self.qpoint(hop.b), a);
+        let den = Wide::cross(d, e)?;
+        Some(match den.sign() {
+            // Along the edge's line: its midpoint, as `map_dir`.
+            Sign::Zero => {
+                let ap = diff(a, hop.prev);
+                (
+                    Wide::from_i128(2 * ap.0 + e.0),
+                    Wide::from_i128(2 * ap.1 + e.1),
+                )
+            }
+            // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
+            s => {
+                let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
+                let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
+                let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
+                if s == Sign::Negative {
+                    (x.neg(), y.neg())
+                } else {
+                    (x, y)
                 }
-                // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
-                s => {
-                    let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
-                    let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
-                    let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
-                    if s == Sign::Negative {
-                        (x.neg(), y.neg())
-                    } else {
-                        (x, y)
-                    }
-                }
-            };
-            cur = hop.prev;
-        }
-        Some(d)
+            }
+        })
     }
 }
 

@@ -75,7 +75,9 @@ pub fn view_into<S: Storage>(
 /// of the full view lies exactly on `from` — and the others are the full view's boundaries
 /// strictly inside the range, in order from `from`; a boundary exactly on `to` is left
 /// out. Decided exactly (`Angle::cmp_exact`), so this is exactly the restriction of the
-/// full view.
+/// full view. A range round to the interval containing `from` again (the full circle)
+/// ends with that interval from its own start (when that is not `from`): one more
+/// interval than the full view, which [`view_capacity`] leaves room for.
 ///
 /// Cost: the full walk (the walk starts at θ = 0, where the start cylinder is found without
 /// point location); starting at `from` needs point location in a history.
@@ -104,8 +106,12 @@ pub fn view_range_into<S: Storage>(
         .rposition(|i| i.start.cmp_exact(&f) != Ordering::Greater)
         .unwrap_or(n.saturating_sub(1));
     view.rotate_left(k);
+    // The containing interval's own start, when it is not `from`: its boundary lies in
+    // the range again if the range goes round far enough (the full circle).
+    let mut own = None;
     if let Some(first) = view.first_mut() {
         if n == 1 || first.start.cmp_exact(&f) != Ordering::Equal {
+            own = (n > 1).then_some(*first);
             first.start = f;
             first.start_vertex = None;
         }
@@ -115,7 +121,14 @@ pub fn view_range_into<S: Storage>(
         l < key_t || (l == key_t && i.start.cmp_exact(&t) == Ordering::Less)
     };
     let m = 1 + view.iter().skip(1).take_while(|i| inside(i)).count();
-    Ok(m.min(n))
+    match own {
+        Some(i) if m == n && inside(&i) => {
+            *out.get_mut(n)
+                .ok_or(WalkError::BufferFull { needed: n + 1 })? = i;
+            Ok(n + 1)
+        }
+        _ => Ok(m.min(n)),
+    }
 }
 
 /// [`view_range_into`] into a new vector.
