@@ -105,6 +105,13 @@ impl Edge {
     }
 }
 
+/// `x` rounded to an integer (ties to even) for `|x| ≤ 2⁵¹`: adding and subtracting
+/// 1.5·2⁵² leaves no fraction bits, in two hardware additions (`libm::round` is software).
+fn round_small(x: f64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    (x + MAGIC) - MAGIC
+}
+
 /// A perspective camera with `width` columns (see the module documentation).
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
@@ -195,7 +202,7 @@ impl Camera {
         let d = self.direction_at(x);
         let m = libm::fmax(libm::fabs(d.0), libm::fabs(d.1));
         let k = EDGE_SCALE / m;
-        let v = (libm::round(d.0 * k) as i64, libm::round(d.1 * k) as i64);
+        let v = (round_small(d.0 * k) as i64, round_small(d.1 * k) as i64);
         Edge {
             vector: v,
             x: self.image_x((v.0 as f64, v.1 as f64)),
@@ -205,6 +212,16 @@ impl Camera {
     /// Column edge `c` (`0` is the left edge of the image, `width` the right edge).
     pub fn edge(&self, c: usize) -> Edge {
         self.rounded(self.nominal_x(c.min(self.width)))
+    }
+
+    /// The field of view as exact directions counter-clockwise from the right edge to the
+    /// left edge: the range for [`crate::walk::view_range`] and
+    /// [`crate::walk::ray_tree_range`], whose intervals [`coverage`] and
+    /// [`centre_intervals`] take like full ones.
+    pub fn range(&self) -> (Direction, Direction) {
+        let d =
+            |e: Edge| Direction::new(e.vector.0, e.vector.1).unwrap_or(Direction { x: 1, y: 0 });
+        (d(self.edge(self.width)), d(self.edge(0)))
     }
 
     /// The direction through the centre of column `c`, rounded to an integer vector.
@@ -335,14 +352,14 @@ impl Interval for TreeInterval {
 /// starts known in `f64` only (computed once, not per comparison).
 struct Probe {
     angle: Angle,
-    radians: f64,
+    radians: core::cell::OnceCell<f64>,
 }
 
 impl Probe {
     fn new(angle: Angle) -> Probe {
         Probe {
-            radians: angle.radians(),
             angle,
+            radians: core::cell::OnceCell::new(),
         }
     }
 
@@ -351,7 +368,7 @@ impl Probe {
     fn after_start<I: Interval>(&self, i: &I) -> bool {
         match i.exact_start() {
             Some(s) => s.cmp_exact(&self.angle) != Ordering::Greater,
-            None => i.start_radians() <= self.radians,
+            None => i.start_radians() <= *self.radians.get_or_init(|| self.angle.radians()),
         }
     }
 
@@ -769,4 +786,39 @@ fn norm(x: f64, y: f64) -> f64 {
 fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
     let l = norm(v.0, v.1);
     (l > 0.0 && l.is_finite()).then(|| (v.0 / l, v.1 / l))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_small;
+
+    /// The magic-number rounding agrees with `libm::round` away from ties, rounds ties to
+    /// even, and is exact up to the largest edge component 2⁵⁰ (and beyond, to 2⁵¹).
+    #[test]
+    fn round_small_rounds_to_nearest_up_to_2_pow_51() {
+        let big = (1u64 << 50) as f64;
+        for x in [
+            0.0,
+            0.3,
+            -0.3,
+            0.7,
+            -0.7,
+            1.49,
+            -1.51,
+            12345.678,
+            -98765.4321,
+            big,
+            -big,
+            big - 0.75,
+            -(big - 0.25),
+            2.0 * big - 1.0,
+            -(2.0 * big) + 1.0,
+        ] {
+            assert_eq!(round_small(x), libm::round(x), "{x}");
+        }
+        assert_eq!(round_small(0.5), 0.0);
+        assert_eq!(round_small(1.5), 2.0);
+        assert_eq!(round_small(-2.5), -2.0);
+        assert_eq!(round_small(big + 0.5), big);
+    }
 }

@@ -67,12 +67,18 @@ pub fn load(path: &Path) -> Result<Input, Failure> {
             .to_string(),
         )
     })?;
-    if !is_vcx(path, &bytes) {
-        let file = scene_file::parse_bytes(&bytes)
+    from_bytes(path, &bytes)
+}
+
+/// As [`load`], from the file's bytes (`path` names it in errors and tells the format by
+/// its extension).
+pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Input, Failure> {
+    if !is_vcx(path, bytes) {
+        let file = scene_file::parse_bytes(bytes)
             .map_err(|e| Failure::bad_input(format!("{}: {e}", path.display())))?;
         return Ok(Input { file, stored: None });
     }
-    let loaded = decode_file(&bytes).map_err(|e| vcx_error(path, &e))?;
+    let loaded = decode_file(bytes).map_err(|e| vcx_error(path, &e))?;
     let n = loaded.scene.as_ref().len();
     Ok(Input {
         file: SceneFile {

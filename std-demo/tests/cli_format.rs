@@ -276,14 +276,14 @@ fn corrupt_files_are_one_line_errors() {
     rejects(&["view", s(&p), "--at", "1,1"], &p, &["truncated"]);
     let p = write("short.vcx", &good[..3]);
     rejects(&["check", s(&p)], &p, &["3 bytes"]);
-    // An unknown version.
-    let mut v2 = good.clone();
-    v2[4] = 2;
-    let p = write("v2.vcx", &v2);
+    // An unknown version (2 is the region format of `vcx build --region`).
+    let mut v3 = good.clone();
+    v3[4] = 3;
+    let p = write("v3.vcx", &v3);
     rejects(
         &["check", s(&p)],
         &p,
-        &["format version 2", "byte 4", "supports version 1"],
+        &["format version 3", "byte 4", "supports versions 1 to 2"],
     );
     // A `.vcx` file that is not one.
     let p = write("json.vcx", b"{\"objects\": []}");

@@ -590,17 +590,23 @@ fn counts_inflated_to_the_maximum() {
 fn unknown_version_flags_and_parts() {
     let (_, _, bytes) = small_file();
     let mut b = bytes.clone();
-    b[4..6].copy_from_slice(&2u16.to_le_bytes());
+    // Version 2 is the region format (tests/tests/region.rs); 3 is unknown.
+    b[4..6].copy_from_slice(&3u16.to_le_bytes());
     reseal(&mut b);
     let e = decode(&b).unwrap_err();
     assert_eq!(
         e,
         FormatError::UnsupportedVersion {
-            found: 2,
-            supported: 1
+            found: 3,
+            supported: format::VERSION_REGION
         }
     );
-    assert!(e.to_string().contains("version 2"), "{e}");
+    assert!(e.to_string().contains("version 3"), "{e}");
+    // Version 2 without its region flag.
+    let mut b = bytes.clone();
+    b[4..6].copy_from_slice(&2u16.to_le_bytes());
+    reseal(&mut b);
+    assert_eq!(decode(&b).unwrap_err(), FormatError::RegionFlagMissing);
     // A version this reader does not know is rejected even if nothing else would parse.
     assert!(matches!(
         decode(b"VCX\0\x09\x00"),

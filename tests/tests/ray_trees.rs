@@ -553,7 +553,7 @@ fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
                             } else {
                                 rels[k]
                             };
-                            if !(r < rel_t) {
+                            if r >= rel_t {
                                 break;
                             }
                             want.push((full[k].branch.clone(), full[k].start_vertex));

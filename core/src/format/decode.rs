@@ -11,7 +11,7 @@ use crate::geom::point::MAX_ABS_RAW;
 use crate::geom::sos::Angle;
 use crate::geom::Point;
 use crate::line_space::{tangency, Bitangent, Bound, Chain};
-use crate::partition::{Cylinder, CylinderId, Vertex, VertexId, Wall};
+use crate::partition::{Cylinder, CylinderId, Region, Vertex, VertexId, Wall};
 use crate::scene::{Eta, FixedScene, Material, ObjectId, SceneRef};
 
 /// One object of the scene part as stored: material and vertex count.
@@ -77,6 +77,10 @@ pub struct Decoded<'a, const V: usize, const O: usize> {
     pub vertices: &'a [Vertex],
     /// The cylinders.
     pub cylinders: &'a [Cylinder],
+    /// The region the complex is pruned to (version 2), if any: pass it to
+    /// [`Complex::with_region`](crate::partition::Complex::with_region) so walks from
+    /// outside it fail instead of reaching missing cylinders.
+    pub region: Option<Region>,
 }
 
 /// A reader of one part: postcard fields, one at a time, never past the part's end.
@@ -432,27 +436,78 @@ fn read_cylinders(
     Ok(())
 }
 
+/// Reads the region at the start of a version-2 complex part: four coordinates in range,
+/// `x0 ≤ x1`, `y0 ≤ y1`.
+fn read_region(r: &mut Reader<'_>) -> Result<Region, FormatError> {
+    let mut c = [0i32; 4];
+    let fields = ["x0", "y0", "x1", "y1"];
+    for (k, field) in fields.iter().enumerate() {
+        let (v, at) = r.field::<i32>(Arena::Region, 0, field)?;
+        // The upper corner must not be below the lower one.
+        let min = match k {
+            2 | 3 => c.get(k - 2).copied().unwrap_or(0),
+            _ => -MAX_ABS_RAW,
+        };
+        if v < min || v > MAX_ABS_RAW {
+            return Err(FormatError::Element {
+                arena: Arena::Region,
+                index: 0,
+                field,
+                offset: at,
+                problem: Problem::NotInRange {
+                    value: i64::from(v),
+                    min: i64::from(min),
+                    max: i64::from(MAX_ABS_RAW),
+                },
+            });
+        }
+        if let Some(slot) = c.get_mut(k) {
+            *slot = v;
+        }
+    }
+    let [x0, y0, x1, y1] = c;
+    // In range and ordered (checked above), so this is always a box.
+    Point::from_raw(x0, y0)
+        .zip(Point::from_raw(x1, y1))
+        .and_then(|(a, b)| Region::new(a, b))
+        .ok_or(FormatError::Element {
+            arena: Arena::Region,
+            index: 0,
+            field: "x0",
+            offset: r.pos,
+            problem: Problem::Malformed("not a box"),
+        })
+}
+
 /// Decodes the complex part into `vertices[..V]` and `cylinders[..C]` and checks every id
 /// and link: tangent vertices in range, on two objects, tangent there; vertices strictly
 /// sorted by θ; cylinder objects, chains, walls and neighbours in range; walls in θ order;
-/// neighbours symmetric with the same floor, ceiling and shared wall.
+/// neighbours symmetric with the same floor, ceiling and shared wall. Returns the region
+/// of a version-2 file.
 fn decode_complex(
     bytes: &[u8],
     h: &Header,
     scene: &SceneRef<'_>,
     vertices: &mut [Vertex],
     cylinders: &mut [Cylinder],
-) -> Result<(), FormatError> {
+) -> Result<Option<Region>, FormatError> {
     let nv = capacity(Arena::Vertex, h.complex_vertices, vertices.len())?;
     let nc = capacity(Arena::Cylinder, h.cylinders, cylinders.len())?;
     let vertices = vertices.get_mut(..nv).unwrap_or_default();
     let cylinders = cylinders.get_mut(..nc).unwrap_or_default();
     let range = h.part_range(Part::Complex);
     let mut r = Reader::new(bytes, range.clone());
+    let region = if h.region {
+        Some(read_region(&mut r)?)
+    } else {
+        None
+    };
+    let start = r.pos;
     read_vertices(&mut r, Arena::Vertex, scene, vertices, true)?;
     read_cylinders(&mut r, Arena::Cylinder, scene.len(), nv, cylinders)?;
     r.finish(Part::Complex)?;
-    check_links(bytes, range.start, nv, cylinders)
+    check_links(bytes, start, nv, cylinders)?;
+    Ok(region)
 }
 
 /// Decodes the history part (`docs/format.md`, "History part") into the arenas of
@@ -659,13 +714,14 @@ pub fn decode_into<'a, const V: usize, const O: usize>(
         offset: super::HEADER_LEN,
         error,
     })?;
-    decode_complex(bytes, &header, &scene.as_ref(), vertices, cylinders)?;
+    let region = decode_complex(bytes, &header, &scene.as_ref(), vertices, cylinders)?;
     let (kv, kc) = (header.complex_vertices as usize, header.cylinders as usize);
     Ok(Decoded {
         header,
         scene,
         vertices: vertices.get(..kv).unwrap_or_default(),
         cylinders: cylinders.get(..kc).unwrap_or_default(),
+        region,
     })
 }
 
@@ -709,13 +765,15 @@ pub fn decode(bytes: &[u8]) -> Result<Loaded, FormatError> {
     let mut vertices = vec![BLANK_VERTEX; header.complex_vertices as usize];
     let mut cylinders = vec![BLANK_CYLINDER; header.cylinders as usize];
     let scene_ref = scene.as_ref();
-    decode_complex(bytes, &header, &scene_ref, &mut vertices, &mut cylinders)?;
-    let complex = crate::partition::Complex::from_parts(&scene_ref, vertices, cylinders).map_err(
-        |error| FormatError::Complex {
-            offset: header.part_range(Part::Complex).start,
-            error,
-        },
-    )?;
+    let region = decode_complex(bytes, &header, &scene_ref, &mut vertices, &mut cylinders)?;
+    // A region file is checked with what a pruned complex still satisfies
+    // (`Complex::validate`).
+    let complex =
+        crate::partition::Complex::from_region_parts(&scene_ref, region, vertices, cylinders)
+            .map_err(|error| FormatError::Complex {
+                offset: header.part_range(Part::Complex).start,
+                error,
+            })?;
     let history = if header.has_history() {
         let offset = header.part_range(Part::History).start;
         let fail = |error| FormatError::History { offset, error };

@@ -5,9 +5,10 @@ use serde::Serialize;
 
 use super::{
     crc32, FormatError, Header, CHECKSUM_LEN, HEADER_LEN, PART_COMPLEX, PART_HISTORY, PART_SCENE,
-    VERSION,
+    VERSION, VERSION_REGION,
 };
 use crate::line_space::Bound;
+use crate::partition::Region;
 use crate::partition::{Cylinder, CylinderId, Vertex, Wall};
 use crate::scene::{Material, ObjectId, SceneRef};
 
@@ -137,12 +138,19 @@ fn scene_part(w: &mut Writer<'_>, scene: &SceneRef<'_>) -> Result<(), FormatErro
     Ok(())
 }
 
-/// The complex part: vertices (their two tangent vertices), then cylinders.
+/// The complex part: the region (version 2, if pruned), vertices (their two tangent
+/// vertices), then cylinders.
 fn complex_part(
     w: &mut Writer<'_>,
+    region: Option<&Region>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
 ) -> Result<(), FormatError> {
+    if let Some(r) = region {
+        for c in [r.min().x(), r.min().y(), r.max().x(), r.max().y()] {
+            w.put(&c)?;
+        }
+    }
     put_vertices(w, vertices)?;
     put_cylinders(w, cylinders)
 }
@@ -203,6 +211,7 @@ fn history_part(w: &mut Writer<'_>, h: &HistoryView<'_>) -> Result<usize, Format
 /// The header for this scene and complex (part sizes by a counting pass).
 fn header(
     scene: &SceneRef<'_>,
+    region: Option<&Region>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
     history: Option<&HistoryView<'_>>,
@@ -229,10 +238,15 @@ fn header(
     scene_part(&mut w, scene)?;
     let scene_bytes = id(w.pos)?;
     let mut w = Writer { out: None, pos: 0 };
-    complex_part(&mut w, vertices, cylinders)?;
+    complex_part(&mut w, region, vertices, cylinders)?;
     let complex_bytes = id(w.pos)?;
     let (mut parts, mut history_bytes, mut history_links) = (PART_SCENE | PART_COMPLEX, 0, 0);
     if let Some(h) = history {
+        if region.is_some() {
+            return Err(FormatError::NotEncodable(
+                "a complex pruned to a region is written without history",
+            ));
+        }
         if h.order.len() != scene.len() {
             return Err(FormatError::NotEncodable(
                 "the history has not inserted every object of the scene",
@@ -244,7 +258,13 @@ fn header(
         parts |= PART_HISTORY;
     }
     Ok(Header {
-        version: VERSION,
+        // Files without a region stay version 1, byte for byte.
+        version: if region.is_some() {
+            VERSION_REGION
+        } else {
+            VERSION
+        },
+        region: region.is_some(),
         parts,
         seed: options.seed,
         compacted: options.compacted || history.is_some(),
@@ -267,7 +287,7 @@ pub fn encoded_len(
     cylinders: &[Cylinder],
     options: &EncodeOptions,
 ) -> Result<usize, FormatError> {
-    let h = header(scene, vertices, cylinders, None, options)?;
+    let h = header(scene, None, vertices, cylinders, None, options)?;
     usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))
 }
 
@@ -282,18 +302,19 @@ pub fn encode_into(
     options: &EncodeOptions,
     out: &mut [u8],
 ) -> Result<usize, FormatError> {
-    write_file(scene, vertices, cylinders, None, options, out)
+    write_file(scene, None, vertices, cylinders, None, options, out)
 }
 
 fn write_file(
     scene: &SceneRef<'_>,
+    region: Option<&Region>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
     history: Option<&HistoryView<'_>>,
     options: &EncodeOptions,
     out: &mut [u8],
 ) -> Result<usize, FormatError> {
-    let h = header(scene, vertices, cylinders, history, options)?;
+    let h = header(scene, region, vertices, cylinders, history, options)?;
     let len =
         usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
     let capacity = out.len();
@@ -308,7 +329,7 @@ fn write_file(
         pos: 0,
     };
     scene_part(&mut w, scene)?;
-    complex_part(&mut w, vertices, cylinders)?;
+    complex_part(&mut w, region, vertices, cylinders)?;
     if let Some(hv) = history {
         history_part(&mut w, hv)?;
     }
@@ -324,7 +345,9 @@ fn write_file(
 /// construction that built it, in a new vector. With a history, the complex must be its
 /// live partition as [`History::complex`](crate::partition::History::complex) numbers it
 /// (build both by the randomized construction), and the history must have inserted every
-/// object; the header's compacted flag is set.
+/// object; the header's compacted flag is set. A complex pruned to a region
+/// ([`Complex::region`](crate::partition::Complex::region)) is written as version 2 with its
+/// region, and without history.
 #[cfg(feature = "alloc")]
 pub fn encode(
     scene: &SceneRef<'_>,
@@ -375,11 +398,20 @@ fn encode_parts(
         order: &p.order,
         starts: &p.starts,
     });
-    let h = header(scene, v, c, view.as_ref(), options)?;
+    let region = complex.region();
+    let h = header(scene, region.as_ref(), v, c, view.as_ref(), options)?;
     let len =
         usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
     let mut out = alloc::vec![0u8; len];
-    let len = write_file(scene, v, c, view.as_ref(), options, &mut out)?;
+    let len = write_file(
+        scene,
+        region.as_ref(),
+        v,
+        c,
+        view.as_ref(),
+        options,
+        &mut out,
+    )?;
     out.truncate(len);
     Ok(out)
 }

@@ -42,6 +42,8 @@ pub enum Arena {
     Cylinder,
     /// Vertices of the history (every free bitangent that ever bounded a cylinder).
     HistoryVertex,
+    /// The region of a pruned complex (version 2): its four coordinates.
+    Region,
     /// History nodes (every cylinder that ever existed) and their child counts.
     Node,
     /// History links (child node ids).
@@ -59,6 +61,7 @@ impl Arena {
             Arena::Vertex => "complex vertex",
             Arena::Cylinder => "cylinder",
             Arena::HistoryVertex => "history part: vertex",
+            Arena::Region => "region",
             Arena::Node => "history part: node",
             Arena::Link => "history part: link",
             Arena::Insertion => "history part: insertion",
@@ -143,8 +146,8 @@ pub enum CountProblem {
         /// The largest allowed value.
         limit: u64,
     },
-    /// Breaks `cylinders = 3·objects + 1 + 3·complex vertices` or
-    /// `scene vertices ≥ 3·objects`.
+    /// Breaks `cylinders = 3·objects + 1 + 3·complex vertices` (`≤` for a complex pruned
+    /// to a region) or `scene vertices ≥ 3·objects`.
     Inconsistent,
     /// Non-zero although what it describes is absent (a part, or the seed).
     MustBeZero,
@@ -171,9 +174,12 @@ pub enum FormatError {
     UnsupportedVersion {
         /// The version in the file.
         found: u16,
-        /// The version this reader supports.
+        /// The newest version this reader supports (it reads versions 1 to this).
         supported: u16,
     },
+    /// A version-2 file without the region flag (version 2 exists only for complexes
+    /// pruned to a region; anything else is written as version 1).
+    RegionFlagMissing,
     /// Option flags this version does not define.
     UnknownFlags {
         /// The unknown bits.
@@ -304,7 +310,11 @@ impl core::fmt::Display for FormatError {
             ),
             FormatError::UnsupportedVersion { found, supported } => write!(
                 f,
-                "format version {found} at byte 4 is not supported (this reader supports version {supported})"
+                "format version {found} at byte 4 is not supported (this reader supports versions 1 to {supported})"
+            ),
+            FormatError::RegionFlagMissing => write!(
+                f,
+                "format version 2 at byte 4 without the region flag (bit 2 of the flags at byte 6)"
             ),
             FormatError::UnknownFlags { bits } => {
                 write!(f, "unknown option flags {bits:#06x} at byte 6")

@@ -50,8 +50,12 @@ use crate::scene::FixedScene;
 
 /// The first four bytes of every file.
 pub const MAGIC: [u8; 4] = *b"VCX\0";
-/// The format version this code writes and reads.
+/// The format version this code writes for a complex of the whole scene (and reads).
 pub const VERSION: u16 = 1;
+/// The format version of a complex pruned to a region (`vcx build --region`): version 1
+/// plus flag bit 2 and the region at the start of the complex part. Written only for such
+/// complexes, so every other file stays version 1, readable by version-1 readers.
+pub const VERSION_REGION: u16 = 2;
 /// Bytes of the fixed-size header.
 pub const HEADER_LEN: usize = 56;
 /// Bytes of the checksum at the end.
@@ -61,8 +65,13 @@ pub const CHECKSUM_LEN: usize = 4;
 pub const FLAG_SEED: u16 = 1 << 0;
 /// Flag bit: the history is search-path compacted (§4.4 of the paper).
 pub const FLAG_COMPACTED: u16 = 1 << 1;
+/// Flag bit (version 2): the complex is pruned to a region of viewpoints, stored at the
+/// start of the complex part.
+pub const FLAG_REGION: u16 = 1 << 2;
 /// Every flag bit version 1 defines.
 pub const KNOWN_FLAGS: u16 = FLAG_SEED | FLAG_COMPACTED;
+/// Every flag bit version 2 defines.
+pub const KNOWN_FLAGS_V2: u16 = KNOWN_FLAGS | FLAG_REGION;
 
 /// Part bit: the scene.
 pub const PART_SCENE: u32 = 1 << 0;
@@ -90,6 +99,8 @@ pub const MIN_LINK_BYTES: u64 = 1;
 pub const MIN_INSERTION_BYTES: u64 = 2;
 /// See [`MIN_OBJECT_BYTES`]: the history part's vertex count prefix.
 pub const MIN_HISTORY_PREFIX_BYTES: u64 = 1;
+/// See [`MIN_OBJECT_BYTES`]: the region's four coordinates (version 2, flag bit 2).
+pub const MIN_REGION_BYTES: u64 = 4;
 
 /// Byte offsets of the header fields (`docs/format.md`, table "Header").
 pub mod offset {
@@ -126,7 +137,7 @@ pub mod offset {
 /// The header of a file: counts and options, read and checked before any arena.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Header {
-    /// Format version (always [`VERSION`] after a successful read).
+    /// Format version ([`VERSION`], or [`VERSION_REGION`] for a pruned complex).
     pub version: u16,
     /// Parts bitset ([`PART_SCENE`], [`PART_COMPLEX`], [`PART_HISTORY`]).
     pub parts: u32,
@@ -134,6 +145,9 @@ pub struct Header {
     pub seed: Option<u64>,
     /// Whether the history is search-path compacted (meaningful with a history).
     pub compacted: bool,
+    /// Whether the complex is pruned to a region (version 2, flag bit 2); the region is
+    /// the start of the complex part.
+    pub region: bool,
     /// Scene objects.
     pub objects: u32,
     /// Scene vertices (all objects).
@@ -208,20 +222,28 @@ impl Header {
             return Err(too_short(offset::FLAGS));
         }
         let version = le_u16(bytes, offset::VERSION);
-        if version != VERSION {
+        if version != VERSION && version != VERSION_REGION {
             return Err(FormatError::UnsupportedVersion {
                 found: version,
-                supported: VERSION,
+                supported: VERSION_REGION,
             });
         }
         if bytes.len() < HEADER_LEN + CHECKSUM_LEN {
             return Err(too_short(HEADER_LEN + CHECKSUM_LEN));
         }
         let flags = le_u16(bytes, offset::FLAGS);
-        if flags & !KNOWN_FLAGS != 0 {
+        let known = if version == VERSION {
+            KNOWN_FLAGS
+        } else {
+            KNOWN_FLAGS_V2
+        };
+        if flags & !known != 0 {
             return Err(FormatError::UnknownFlags {
-                bits: flags & !KNOWN_FLAGS,
+                bits: flags & !known,
             });
+        }
+        if version == VERSION_REGION && flags & FLAG_REGION == 0 {
+            return Err(FormatError::RegionFlagMissing);
         }
         let parts = le_u32(bytes, offset::PARTS);
         if parts & !KNOWN_PARTS != 0 {
@@ -240,6 +262,7 @@ impl Header {
             parts,
             seed: (flags & FLAG_SEED != 0).then_some(seed_raw),
             compacted: flags & FLAG_COMPACTED != 0,
+            region: flags & FLAG_REGION != 0,
             objects: le_u32(bytes, offset::OBJECTS),
             scene_vertices: le_u32(bytes, offset::SCENE_VERTICES),
             complex_vertices: le_u32(bytes, offset::COMPLEX_VERTICES),
@@ -322,7 +345,10 @@ impl Header {
                 CountProblem::Inconsistent,
             ));
         }
-        if c != 3 * n + 1 + 3 * v {
+        // A pruned complex keeps at most the 3n + 1 cylinders at θ = 0 and three opened by
+        // each vertex it keeps; a whole one has exactly that many.
+        let full = 3 * n + 1 + 3 * v;
+        if (self.region && c > full) || (!self.region && c != full) {
             return Err(count(
                 "cylinders",
                 offset::CYLINDERS,
@@ -355,7 +381,8 @@ impl Header {
             points_min,
             self.scene_bytes,
         )?;
-        let vertices_min = v * MIN_VERTEX_BYTES;
+        let region_min = if self.region { MIN_REGION_BYTES } else { 0 };
+        let vertices_min = region_min + v * MIN_VERTEX_BYTES;
         fits(
             "complex_vertices",
             offset::COMPLEX_VERTICES,
@@ -431,7 +458,8 @@ impl Header {
             }
         };
         let flags = if self.seed.is_some() { FLAG_SEED } else { 0 }
-            | if self.compacted { FLAG_COMPACTED } else { 0 };
+            | if self.compacted { FLAG_COMPACTED } else { 0 }
+            | if self.region { FLAG_REGION } else { 0 };
         put(offset::MAGIC, &MAGIC);
         put(offset::VERSION, &self.version.to_le_bytes());
         put(offset::FLAGS, &flags.to_le_bytes());

@@ -32,6 +32,7 @@
 
 mod borders;
 mod locate;
+pub mod region;
 #[cfg(feature = "alloc")]
 mod ric;
 #[cfg(feature = "alloc")]
@@ -43,6 +44,7 @@ mod validate;
 pub use borders::Borders;
 pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer, Side};
 pub use locate::{point_in_scene, Location};
+pub use region::{Region, RegionError};
 #[cfg(feature = "alloc")]
 pub use ric::{Budget, BuildOptions, History, HistoryParts, HistoryStats};
 #[cfg(feature = "alloc")]
@@ -167,6 +169,9 @@ pub struct Complex<S: Storage = Owned> {
     pub(crate) vertices: S::Vertices,
     pub(crate) cylinders: S::Cylinders,
     pub(crate) borders: S::Borders,
+    /// The box of viewpoints the complex was pruned to (`region`); `None`: the whole
+    /// complex.
+    pub(crate) region: Option<Region>,
 }
 
 /// The visibility complex of a scene as a cylindrical partition, in storage `S` (without
@@ -177,6 +182,9 @@ pub struct Complex<S: Storage> {
     pub(crate) vertices: S::Vertices,
     pub(crate) cylinders: S::Cylinders,
     pub(crate) borders: S::Borders,
+    /// The box of viewpoints the complex was pruned to (`region`); `None`: the whole
+    /// complex.
+    pub(crate) region: Option<Region>,
 }
 
 #[cfg(feature = "alloc")]
@@ -192,6 +200,7 @@ impl Complex {
             vertices,
             cylinders,
             borders: Borders::default(),
+            region: None,
         };
         complex.borders = borders::build(scene, &complex);
         complex
@@ -216,7 +225,17 @@ impl<'a> Complex<Slices<'a>> {
             vertices,
             cylinders,
             borders,
+            region: None,
         })
+    }
+
+    /// The same complex marked as pruned to `region` (a device that decoded a region
+    /// file passes `Decoded::region` here): walks from outside it are
+    /// [`WalkError::OutsideRegion`](crate::walk::WalkError::OutsideRegion).
+    #[must_use]
+    pub fn with_region(mut self, region: Option<Region>) -> Self {
+        self.region = region;
+        self
     }
 }
 
@@ -242,7 +261,14 @@ impl<S: Storage> Complex<S> {
             vertices: self.vertices(),
             cylinders: self.cylinders(),
             borders: self.borders_ref(),
+            region: self.region,
         }
+    }
+
+    /// The box of viewpoints this complex was pruned to ([`Complex::prune_to_region`]),
+    /// if any: it holds only the cylinders views from there need.
+    pub fn region(&self) -> Option<Region> {
+        self.region
     }
 
     /// The cylinder with this id.

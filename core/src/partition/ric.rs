@@ -594,6 +594,7 @@ impl History {
             vertices,
             cylinders,
             borders: Default::default(),
+            region: None,
         };
         complex.borders = super::borders::build(scene, &complex);
         Ok(complex)

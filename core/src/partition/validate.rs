@@ -39,8 +39,15 @@ pub enum ComplexError {
         /// Where it got lost.
         step: &'static str,
     },
-    /// Counts break `cylinders = 3·objects + 1 + 3·vertices`.
+    /// Counts break `cylinders = 3·objects + 1 + 3·vertices` (for a complex pruned to a
+    /// region: a vertex closes or opens more than three cylinders or none at all, or
+    /// `cylinders > 3·objects + 1 + 3·vertices`).
     Count,
+    /// A complex pruned to a region has a cylinder at θ = 0 after one that is not.
+    ZeroPrefix {
+        /// The cylinder at fault.
+        cylinder: usize,
+    },
     /// A vertex's tangent vertices or objects are out of range for the scene.
     VertexOutOfRange {
         /// The vertex at fault.
@@ -99,6 +106,10 @@ impl core::fmt::Display for ComplexError {
                 write!(f, "inserting object {object}: conflict chain lost ({step})")
             }
             ComplexError::Count => write!(f, "cylinder count breaks 3n + 1 + 3V"),
+            ComplexError::ZeroPrefix { cylinder } => write!(
+                f,
+                "cylinder {cylinder}: starts at θ = 0 but follows cylinders that do not"
+            ),
             ComplexError::VertexOutOfRange { vertex } => {
                 write!(f, "vertex {vertex}: tangent vertex or object out of range")
             }
@@ -130,6 +141,18 @@ impl Complex {
         vertices: alloc::vec::Vec<super::Vertex>,
         cylinders: alloc::vec::Vec<super::Cylinder>,
     ) -> Result<Complex, ComplexError> {
+        Complex::from_region_parts(scene, None, vertices, cylinders)
+    }
+
+    /// [`Complex::from_parts`] for a complex pruned to `region` (`Some`; e.g. decoded from
+    /// a version-2 file): validated with the checks a pruned complex still satisfies (see
+    /// [`Complex::validate`]).
+    pub fn from_region_parts(
+        scene: &SceneRef<'_>,
+        region: Option<super::Region>,
+        vertices: alloc::vec::Vec<super::Vertex>,
+        cylinders: alloc::vec::Vec<super::Cylinder>,
+    ) -> Result<Complex, ComplexError> {
         if u32::try_from(cylinders.len()).is_err() || u32::try_from(vertices.len()).is_err() {
             return Err(ComplexError::TooLarge);
         }
@@ -137,6 +160,7 @@ impl Complex {
             vertices,
             cylinders,
             borders: Default::default(),
+            region,
         };
         complex.validate(scene)?;
         complex.borders = super::borders::build(scene, &complex);
@@ -148,6 +172,13 @@ impl Complex {
     /// shared wall, every vertex closing and opening three cylinders, the count
     /// `3n + 1 + 3V`, and that the cylinders crossing θ = 0 are exactly the cross-section
     /// there.
+    ///
+    /// A complex pruned to a region ([`Complex::region`]) lacks cylinders by design, so
+    /// exactly the checks that count cylinders are relaxed for it, and only for it: every
+    /// vertex closes and opens at most three cylinders and is a wall of at least one,
+    /// `cylinders ≤ 3n + 1 + 3V`, and the cylinders crossing θ = 0 are a part of the
+    /// cross-section there (each interval at most once) and come first in the arena (the
+    /// walk's start scans that prefix). The other checks are the same.
     pub fn validate(&self, scene: &SceneRef<'_>) -> Result<(), ComplexError> {
         let nc = self.cylinders.len();
         let (objects, points) = (scene.len(), scene.vertices().len());
@@ -224,6 +255,9 @@ impl Complex {
                 opens[v.index()] = opens[v.index()].saturating_add(1);
             }
         }
+        if self.region.is_some() {
+            return self.validate_pruned(scene, &closes, &opens);
+        }
         if closes.iter().chain(&opens).any(|&k| k != 3)
             || nc != 3 * scene.len() + 1 + 3 * self.vertices.len()
         {
@@ -245,6 +279,60 @@ impl Complex {
         want.sort();
         if at_zero != want {
             return Err(ComplexError::CrossSection);
+        }
+        Ok(())
+    }
+
+    /// The counting checks of a pruned complex ([`Complex::validate`]).
+    fn validate_pruned(
+        &self,
+        scene: &SceneRef<'_>,
+        closes: &[u8],
+        opens: &[u8],
+    ) -> Result<(), ComplexError> {
+        let nc = self.cylinders.len();
+        if closes.iter().chain(opens).any(|&k| k > 3)
+            || closes.iter().zip(opens).any(|(&c, &o)| c == 0 && o == 0)
+            || nc > 3 * scene.len() + 1 + 3 * self.vertices.len()
+        {
+            return Err(ComplexError::Count);
+        }
+        // The cylinders at θ = 0 first, then none.
+        let prefix = self
+            .cylinders
+            .iter()
+            .take_while(|c| c.left == Wall::Zero)
+            .count();
+        if let Some(i) = self
+            .cylinders
+            .iter()
+            .skip(prefix)
+            .position(|c| c.left == Wall::Zero)
+        {
+            return Err(ComplexError::ZeroPrefix {
+                cylinder: prefix + i,
+            });
+        }
+        let mut at_zero: alloc::vec::Vec<Interval> = self
+            .cylinders
+            .iter()
+            .take(prefix)
+            .map(|c| Interval {
+                floor: c.floor,
+                ceiling: c.ceiling,
+                bottom: c.bottom,
+                top: c.top,
+            })
+            .collect();
+        let mut want = cross_section(scene, &Angle::ZERO);
+        at_zero.sort();
+        want.sort();
+        // A sub-multiset of the cross-section: a merge of the two sorted lists.
+        let mut rest = want.iter();
+        for got in &at_zero {
+            if !rest.by_ref().any(|w| w == got) {
+                return Err(ComplexError::CrossSection);
+            }
         }
         Ok(())
     }

@@ -157,6 +157,10 @@ pub enum WalkError {
         /// Intervals produced so far, plus the one that did not fit.
         needed: usize,
     },
+    /// The complex is pruned to a region of viewpoints (`vcx build --region`,
+    /// [`Complex::region`]) and the viewpoint lies outside it: the cylinders its view
+    /// needs may be missing.
+    OutsideRegion(crate::partition::Region),
 }
 
 impl core::fmt::Display for WalkError {
@@ -178,6 +182,13 @@ impl core::fmt::Display for WalkError {
             WalkError::BufferFull { needed } => {
                 write!(f, "output buffer full: at least {needed} intervals needed")
             }
+            WalkError::OutsideRegion(r) => {
+                let ((x0, y0), (x1, y1)) = (r.min().to_f64(), r.max().to_f64());
+                write!(
+                    f,
+                    "viewpoint outside the region {x0},{y0},{x1},{y1} the complex was pruned to"
+                )
+            }
         }
     }
 }
@@ -193,12 +204,20 @@ impl<S: Storage> Complex<S> {
     /// first (the sweep creates them first, `History::complex` puts them first), so the
     /// scan stops within them — O(cylinders at θ = 0), about 3n for the grid scenes — and
     /// the exact test runs only on those whose chains' heights bracket `q`.
+    ///
+    /// A complex pruned to a region ([`Complex::region`]) walks only from points inside it
+    /// ([`WalkError::OutsideRegion`] otherwise); a link it lacks stops the walk with
+    /// [`WalkError::Corrupt`].
     pub fn walk_trace(
         &self,
         scene: &SceneRef<'_>,
         q: QueryPoint,
         mut step: impl FnMut(&Step),
     ) -> Result<(), WalkError> {
+        // A pruned complex holds only what views from its region need (`partition::region`).
+        if let Some(r) = self.region().filter(|r| !r.contains(q)) {
+            return Err(WalkError::OutsideRegion(r));
+        }
         if let Some(l) = crate::partition::point_in_scene(scene, q) {
             return Err(WalkError::NotFree(l));
         }
@@ -261,6 +280,21 @@ impl<S: Storage> Complex<S> {
         let before = |a: (u8, &Angle), b: (u8, &Angle)| {
             a.0 < b.0 || (a.0 == b.0 && a.1.cmp_angle(b.1) == Ordering::Less)
         };
+        // The tangents from `q` to the last few chain objects: consecutive cylinders of a
+        // trace mostly share a chain, and the tangents depend only on the object.
+        let mut cache = [(None::<ObjectId>, [(0usize, Bound::Lower); 2], 0usize); 4];
+        let mut next_slot = 0;
+        let mut tangents = |object: ObjectId| {
+            if let Some(&(_, t, n)) = cache.iter().find(|e| e.0 == Some(object)) {
+                return (t, n);
+            }
+            let (t, n) = crate::line_space::tangents_from(scene, object, q);
+            if let Some(slot) = cache.get_mut(next_slot % 4) {
+                *slot = (Some(object), t, n);
+            }
+            next_slot += 1;
+            (t, n)
+        };
         for _ in 0..4 * self.cylinders().len() + 4 {
             let c = self.cylinder(cur).ok_or(WalkError::Corrupt)?;
             // The first exit after θ: the right wall, or a crossing of the bottom or top chain.
@@ -274,8 +308,8 @@ impl<S: Storage> Complex<S> {
                 if anchor == Anchor::Floor(chain.object) {
                     continue;
                 }
-                let (tangents, count) = crate::line_space::tangents_from(scene, chain.object, q);
-                for &(h, bound) in tangents.iter().take(count) {
+                let (found, count) = tangents(chain.object);
+                for &(h, bound) in found.iter().take(count) {
                     let forward = Angle::from_query(q, ranked(scene, h));
                     // The line q → h lies on `bound`; its reverse on the other chain.
                     let (a, ahead) = if bound == chain.bound {
@@ -335,8 +369,10 @@ impl<S: Storage> Complex<S> {
                     } else {
                         Layer::After
                     };
+                    // The entered cylinder overlaps the one left: scan the far side from
+                    // there (usually a step or two) instead of bisecting the tiling.
                     let next = self
-                        .across(scene, chain, side, layer, &theta)
+                        .across_from(scene, cur, side, layer, &theta)
                         .ok_or(WalkError::Corrupt)?;
                     if let Anchor::Floor(m) = anchor {
                         if self.cylinder(next).and_then(|n| n.floor) != Some(m) {

@@ -14,6 +14,9 @@
 //!   `--fov DEG [--heading DEG] [--width W]` each measurement is a frame of W columns: the
 //!   same sweep plus per-column hits (`render::centre_intervals`, `render::hit_along`) and
 //!   exact per-column coverage (`render::coverage`); adds `us_per_frame`.
+//!
+//! The measurements ([`time_build`], [`measure_views`]) are also those of the sections of
+//! `vcx bench figures` (BENCHMARKS.md).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -37,7 +40,8 @@ pub enum Bench {
     Error(super::bench_error::Args),
     /// Numerical-stability stress test: exact against naive f64 predicates.
     Stability(super::stability::Args),
-    /// The paper's experiments (Figs. 9–19): every table and SVG plot in one run.
+    /// Every benchmark in one run: BENCHMARKS.md and its SVG plots (the paper's Figs.
+    /// 9–19, views, ray trees, frames, sizes, error, stability).
     Figures(super::figures::Args),
 }
 
@@ -100,6 +104,11 @@ pub struct ViewsArgs {
     /// Columns of a frame.
     #[arg(long, default_value_t = 800)]
     pub width: usize,
+    /// Draw the random viewpoints in this box (`X0,Y0,X1,Y1`) instead of the scene's
+    /// bounding box; by default the region of a `.vcx` file pruned to one (`vcx build
+    /// --region`), so a full and a pruned file are timed from the same points.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
+    pub region: Option<String>,
 }
 
 /// Runs a benchmark.
@@ -129,6 +138,56 @@ pub(crate) fn history_bytes(h: &vcx::partition::HistoryStats) -> usize {
     h.nodes * core::mem::size_of::<Cylinder>() + h.links * 4
 }
 
+/// One construction measured `repeat` times: every run's seconds (of the construction
+/// alone, not of `History::complex`) and the results of the last run.
+pub(crate) struct Timed {
+    /// Seconds of each run.
+    pub times: Vec<f64>,
+    /// The complex (of the last run).
+    pub complex: Complex,
+    /// The history's statistics (randomized construction only).
+    pub history: Option<vcx::partition::HistoryStats>,
+}
+
+impl Timed {
+    /// The best run.
+    pub fn best(&self) -> f64 {
+        self.times.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Builds the complex of `scene` `repeat` times (at least once) by the randomized
+/// incremental construction with `options` (`ric`) or by the sweep: `vcx bench build`'s
+/// measurement, also used by `vcx bench figures`.
+pub(crate) fn time_build(
+    scene: &vcx::SceneRef<'_>,
+    ric: bool,
+    options: &BuildOptions,
+    repeat: u32,
+) -> Result<Timed, Failure> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        let built = if ric {
+            let h = History::build(scene, options).map_err(internal)?;
+            times.push(t.elapsed().as_secs_f64());
+            (h.complex(scene).map_err(internal)?, Some(h.stats()))
+        } else {
+            let c = build_by_sweep(scene).map_err(internal)?;
+            times.push(t.elapsed().as_secs_f64());
+            (c, None)
+        };
+        last = Some(built);
+    }
+    let (complex, history) = last.ok_or_else(|| internal("no run"))?;
+    Ok(Timed {
+        times,
+        complex,
+        history,
+    })
+}
+
 fn build(a: &BuildArgs) -> Result<(), Failure> {
     let mut out = String::new();
     for &n in &a.n {
@@ -141,42 +200,21 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
             _ => &[MethodChoice::Sweep],
         };
         for &m in methods {
-            let mut best = f64::INFINITY;
-            let mut last = None;
-            for _ in 0..a.repeat.max(1) {
-                let t = Instant::now();
-                let (complex, history) = match m {
-                    MethodChoice::Ric => {
-                        let h = History::build(
-                            &scene,
-                            &BuildOptions {
-                                seed: a.seed,
-                                ..Default::default()
-                            },
-                        )
-                        .map_err(internal)?;
-                        let secs = t.elapsed().as_secs_f64();
-                        best = best.min(secs);
-                        (h.complex(&scene).map_err(internal)?, Some(h.stats()))
-                    }
-                    _ => {
-                        let c = build_by_sweep(&scene).map_err(internal)?;
-                        best = best.min(t.elapsed().as_secs_f64());
-                        (c, None)
-                    }
-                };
-                last = Some((complex, history));
-            }
-            let Some((c, h)) = last else { continue };
+            let options = BuildOptions {
+                seed: a.seed,
+                ..Default::default()
+            };
+            let t = time_build(&scene, m == MethodChoice::Ric, &options, a.repeat)?;
+            let (c, h) = (&t.complex, t.history);
             let line = json!({
                 "scene": "grid",
                 "n": n,
                 "method": if m == MethodChoice::Ric { "ric" } else { "sweep" },
-                "seconds": best,
+                "seconds": t.best(),
                 "cylinders": c.cylinders().len(),
                 "complex_vertices": c.vertices().len(),
                 "free_bitangents": c.free_bitangents(),
-                "complex_bytes": bytes(&c),
+                "complex_bytes": bytes(c),
                 "history_nodes": h.map(|h| h.nodes),
                 "history_links": h.map(|h| h.links),
                 "history_depth": h.map(|h| h.depth),
@@ -193,6 +231,103 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
 fn views(a: &ViewsArgs) -> Result<(), Failure> {
     // JSON or `.vcx`: a stored complex is used where it is the one needed (crate::input).
     let input = crate::input::load(&a.scene)?;
+    let points = match &a.points {
+        Some(path) => Points::Given(
+            super::view::read_points(path)?
+                .into_iter()
+                .map(|p| p.q)
+                .collect(),
+        ),
+        None => {
+            let stored = input.stored.as_ref().and_then(|s| s.complex.region());
+            let region = match &a.region {
+                Some(text) => Some(super::build::parse_region("--region", text)?),
+                None => stored,
+            };
+            match region {
+                Some(r) => Points::Given(random_points_in(
+                    &input.file.scene.as_ref(),
+                    &r,
+                    a.random,
+                    a.seed,
+                )),
+                None => Points::Random(a.random, a.seed),
+            }
+        }
+    };
+    let frame = a.fov.map(|fov| FrameSpec {
+        heading: a.heading,
+        fov,
+        width: a.width,
+    });
+    let m = measure_views(&input, &points, a.depth, a.repeat, frame)?;
+    let mut line = json!({
+        "scene": a.scene.display().to_string(),
+        "objects": m.objects,
+        "depth": a.depth,
+        "cylinders": m.cylinders,
+        "views": m.views,
+        "us_per_view": m.seconds * 1e6,
+        "views_per_second": 1.0 / m.seconds,
+        "events_per_view": m.events,
+        "intervals_per_view": m.intervals,
+    });
+    if let Some(fov) = a.fov {
+        // Each "view" is a frame: sweep, per-column hits and exact coverage.
+        line["frame"] = json!({ "heading": a.heading, "fov": fov, "width": a.width });
+        line["us_per_frame"] = json!(m.seconds * 1e6);
+        line["frames_per_second"] = json!(1.0 / m.seconds);
+    }
+    write_stdout(&format!("{line}\n"))
+}
+
+/// The viewpoints of `vcx bench views`.
+pub(crate) enum Points {
+    /// These points (`--points FILE`).
+    Given(Vec<QueryPoint>),
+    /// This many random free points of the walked scene, from this seed (`--random K
+    /// --seed S`).
+    Random(usize, u64),
+}
+
+/// A frame of `vcx bench views --fov`: heading and field of view in degrees, columns.
+#[derive(Clone, Copy)]
+pub(crate) struct FrameSpec {
+    /// Heading, degrees.
+    pub heading: f64,
+    /// Horizontal field of view, degrees.
+    pub fov: f64,
+    /// Columns.
+    pub width: usize,
+}
+
+/// What `vcx bench views` measures.
+pub(crate) struct ViewsMeasure {
+    /// Objects of the walked scene (screens left out at depth 0).
+    pub objects: usize,
+    /// Cylinders of its complex.
+    pub cylinders: usize,
+    /// Viewpoints measured (the free ones).
+    pub views: usize,
+    /// Median over the viewpoints of each one's best time, seconds per view (or frame).
+    pub seconds: f64,
+    /// Mean events (cylinders entered by the primary walk) per view.
+    pub events: f64,
+    /// Mean intervals per view (or ray-tree leaves).
+    pub intervals: f64,
+}
+
+/// `vcx bench views`' measurement: the full 360° view (depth 0, screens left out) or the
+/// ray tree to `depth` (screens kept) from each free point, each timed as the best of
+/// `repeat` runs, as a frame of `frame`'s columns if given. The complex is the input's
+/// stored one where it is the walked scene's (a `.vcx` file), else built by the sweep.
+pub(crate) fn measure_views(
+    input: &crate::input::Input,
+    points: &Points,
+    depth: usize,
+    repeat: u32,
+    frame: Option<FrameSpec>,
+) -> Result<ViewsMeasure, Failure> {
     let file = &input.file;
     let full = file.scene.as_ref();
     let keep = full
@@ -202,48 +337,54 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         .filter(|(_, o)| o.material != Material::Screen)
         .map(|(i, _)| ObjectId(i as u32));
     // Depth 0 walks the complex without screens; ray trees need them in the complex.
-    let sub = if a.depth == 0 {
+    let sub = if depth == 0 {
         SubScene::new(full, keep)
     } else {
         SubScene::new(full, (0..full.len() as u32).map(ObjectId))
     };
     let scene = sub.as_ref();
     let complex = input.complex_for(&scene).map_err(internal)?;
-    let points: Vec<QueryPoint> = match &a.points {
-        Some(path) => super::view::read_points(path)?
-            .into_iter()
-            .map(|p| p.q)
-            .collect(),
-        None => random_points(&scene, a.random, a.seed),
+    let points: Vec<QueryPoint> = match points {
+        Points::Given(p) => p.clone(),
+        Points::Random(k, seed) => random_points(&scene, *k, *seed),
     };
+    let width = frame.map_or(0, |f| f.width);
     let mut times = Vec::with_capacity(points.len());
     let (mut events, mut boundaries, mut used) = (0usize, 0usize, 0usize);
     for &q in &points {
         if vcx::partition::point_in_scene(&full, q).is_some() {
             continue;
         }
-        let camera = match a.fov {
-            Some(fov) => Some(
-                Camera::new(q, a.heading.to_radians(), fov.to_radians(), a.width)
+        let camera = match frame {
+            Some(f) => Some(
+                Camera::new(q, f.heading.to_radians(), f.fov.to_radians(), f.width)
                     .map_err(|e| Failure::bad_input(format!("--heading/--fov/--width: {e}")))?,
             ),
             None => None,
         };
-        let mut columns = vec![0usize; a.width];
+        let mut columns = vec![0usize; width];
         let mut count = || -> Result<usize, Failure> {
-            Ok(if a.depth == 0 {
+            Ok(if depth == 0 {
                 let v = vcx::walk::view(&complex, &scene, q).map_err(internal)?;
-                frame(&scene, camera.as_ref(), &v, &mut columns);
+                self::frame(&scene, camera.as_ref(), &v, &mut columns);
                 v.len()
             } else {
-                let t = vcx::walk::ray_tree(&complex, &scene, q, a.depth).map_err(internal)?;
-                frame(&scene, camera.as_ref(), &t, &mut columns);
+                // A frame walks the ray tree over its field of view only.
+                let t = match &camera {
+                    Some(cam) => {
+                        let (from, to) = cam.range();
+                        vcx::walk::ray_tree_range(&complex, &scene, q, depth, from, to)
+                    }
+                    None => vcx::walk::ray_tree(&complex, &scene, q, depth),
+                }
+                .map_err(internal)?;
+                self::frame(&scene, camera.as_ref(), &t, &mut columns);
                 t.len()
             })
         };
         let mut best = f64::INFINITY;
         let mut intervals = 0;
-        for _ in 0..a.repeat.max(1) {
+        for _ in 0..repeat.max(1) {
             let t = Instant::now();
             intervals = core::hint::black_box(count()?);
             best = best.min(t.elapsed().as_secs_f64());
@@ -255,29 +396,18 @@ fn views(a: &ViewsArgs) -> Result<(), Failure> {
         times.push(best);
         used += 1;
     }
-    if times.is_empty() {
-        return Err(Failure::bad_input("no free viewpoint to measure"));
-    }
     times.sort_by(f64::total_cmp);
-    let median = times[times.len() / 2];
-    let mut line = json!({
-        "scene": a.scene.display().to_string(),
-        "objects": scene.len(),
-        "depth": a.depth,
-        "cylinders": complex.cylinders().len(),
-        "views": used,
-        "us_per_view": median * 1e6,
-        "views_per_second": 1.0 / median,
-        "events_per_view": events as f64 / used as f64,
-        "intervals_per_view": boundaries as f64 / used as f64,
-    });
-    if let Some(fov) = a.fov {
-        // Each "view" is a frame: sweep, per-column hits and exact coverage.
-        line["frame"] = json!({ "heading": a.heading, "fov": fov, "width": a.width });
-        line["us_per_frame"] = json!(median * 1e6);
-        line["frames_per_second"] = json!(1.0 / median);
-    }
-    write_stdout(&format!("{line}\n"))
+    let Some(&median) = times.get(times.len() / 2) else {
+        return Err(Failure::bad_input("no free viewpoint to measure"));
+    };
+    Ok(ViewsMeasure {
+        objects: scene.len(),
+        cylinders: complex.cylinders().len(),
+        views: used,
+        seconds: median,
+        events: events as f64 / used as f64,
+        intervals: boundaries as f64 / used as f64,
+    })
 }
 
 /// The per-column work of a frame after the sweep (nothing without a camera): the interval
@@ -311,6 +441,29 @@ fn random_points(scene: &vcx::SceneRef<'_>, k: usize, seed: u64) -> Vec<QueryPoi
         lo = (lo.0.min(q.x()), lo.1.min(q.y()));
         hi = (hi.0.max(q.x()), hi.1.max(q.y()));
     }
+    random_points_between(scene, lo, hi, k, seed)
+}
+
+/// `k` random free points of the scene in the closed box `region` (`--region`).
+fn random_points_in(
+    scene: &vcx::SceneRef<'_>,
+    region: &vcx::partition::Region,
+    k: usize,
+    seed: u64,
+) -> Vec<QueryPoint> {
+    let (lo, hi) = (region.min().to_query(), region.max().to_query());
+    // One more than the width: the upper edges are drawn too.
+    random_points_between(scene, (lo.x(), lo.y()), (hi.x() + 1, hi.y() + 1), k, seed)
+}
+
+/// `k` random free points in `[lo, hi)` (query grid), at most `20 k` draws.
+fn random_points_between(
+    scene: &vcx::SceneRef<'_>,
+    lo: (i64, i64),
+    hi: (i64, i64),
+    k: usize,
+    seed: u64,
+) -> Vec<QueryPoint> {
     let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
     let mut next = |lo: i64, hi: i64| {
         s ^= s << 13;

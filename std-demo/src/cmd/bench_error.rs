@@ -6,8 +6,9 @@
 //! of the scene's size, the heading turning 360°/F per frame), every frame of `W` columns is
 //! rendered three ways, all in the same run, complexes and acceleration structures built
 //! beforehand:
-//! * **complex**: the ray tree to depth D ([`vcx::walk::ray_tree`], over the complex of the
-//!   whole scene) and its exact per-column coverage ([`CoverageTable::exact`]) — the truth,
+//! * **complex**: the ray tree to depth D over the frame's field of view
+//!   ([`vcx::walk::ray_tree_range`], over the complex of the whole scene) and its exact
+//!   per-column coverage ([`CoverageTable::exact`]) — the truth,
 //!   error 0 by construction (checked against the exact reference in `tests/tests/render.rs`);
 //! * **quadtree** and **bvh** (`vcx-baselines`): `s` stratified rays per column for each
 //!   `s` of `--samples`, traced through the same optics.
@@ -34,7 +35,7 @@ use std::time::Instant;
 use serde_json::{json, Value};
 use vcx::partition::{build_by_sweep, point_in_scene};
 use vcx::render::{Camera, CoverageTable};
-use vcx::walk::ray_tree;
+use vcx::walk::ray_tree_range;
 use vcx::{QueryPoint, SceneRef};
 use vcx_baselines::{render, render_columns, BvhCaster, Caster, Prepared, Quadtree};
 
@@ -410,15 +411,17 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
     let (mut tree_times, mut cover_times) = (Vec::new(), Vec::new());
     let mut used = Vec::new();
     for cam in &cameras {
+        let (from, to) = cam.range();
         let r = timed(&mut times, a.repeat, || {
-            ray_tree(&complex, &scene, cam.eye(), a.depth)
+            ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to)
                 .map(|tree| (CoverageTable::exact(cam, &tree), tree.len()))
         });
         // A viewpoint the walk rejects (degenerate rounded optics) is left out.
         if let Ok((table, n)) = r {
-            // The two stages apart: the walk (360° ray tree), then the frame's coverage.
+            // The two stages apart: the walk (the ray tree over the field of view), then
+            // the frame's coverage.
             if let Ok(tree) = timed(&mut tree_times, a.repeat, || {
-                ray_tree(&complex, &scene, cam.eye(), a.depth)
+                ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to)
             }) {
                 timed(&mut cover_times, a.repeat, || {
                     CoverageTable::exact(cam, &tree)

@@ -34,6 +34,16 @@
 //!
 //! A history is written only with the randomized construction, whose live partition is the
 //! file's complex. The scene may itself be a `.vcx` file (its scene is rebuilt).
+//!
+//! `--region X0,Y0,X1,Y1` (scene units; a closed box): the viewpoints will stay in this
+//! box, so only the cylinders a view from it can enter are kept
+//! ([`vcx::partition::Complex::prune_to_region`]; a conservative superset decided
+//! exactly, see `core/src/partition/region.rs`). The summary ends with `; region
+//! X0,Y0,X1,Y1: kept K of C cylinders` (`--stats-json`: `cylinders` is K, plus `region`
+//! `[x0, y0, x1, y1]` and `full_cylinders` C), and `-o` writes format version 2 with the
+//! region. Such a file has no history: `--history always` with `--region` is an error
+//! (exit status 2), `auto` writes none. Scenes with mirrors, refractive objects or screens
+//! are refused (exit status 2): ray trees leave the box.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -96,6 +106,37 @@ pub struct Args {
     /// mirrors, refractive objects or screens).
     #[arg(long, value_enum, default_value_t = HistoryChoice::Auto)]
     pub history: HistoryChoice,
+    /// Keep only the cylinders views from viewpoints in this box need (`X0,Y0,X1,Y1`,
+    /// scene units; all-opaque scenes only; no history).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
+    pub region: Option<String>,
+}
+
+/// Parses `X0,Y0,X1,Y1` (scene units, rounded to the grid) into a box; `what` names the
+/// option in errors.
+pub fn parse_region(what: &str, text: &str) -> Result<vcx::partition::Region, Failure> {
+    let bad = |why: String| Failure::bad_input(format!("{what} {text:?}: {why}"));
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad(format!("not four numbers X0,Y0,X1,Y1 ({e})")))?;
+    let [x0, y0, x1, y1] = v[..] else {
+        return Err(bad(format!(
+            "{} numbers, expected four: X0,Y0,X1,Y1",
+            v.len()
+        )));
+    };
+    let point = |x: f64, y: f64| {
+        vcx::Point::from_f64(x, y).map(|(p, _)| p).map_err(|e| {
+            bad(match e {
+                vcx::geom::CoordinateError::NotFinite => "not a finite number".to_string(),
+                _ => "outside ±16384 (the coordinate range)".to_string(),
+            })
+        })
+    };
+    vcx::partition::Region::new(point(x0, y0)?, point(x1, y1)?)
+        .ok_or_else(|| bad("X0 ≤ X1 and Y0 ≤ Y1 are needed".to_string()))
 }
 
 /// Whether a walk in this scene can need point location from a secondary ray: it has a
@@ -172,7 +213,20 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         first,
         ..Default::default()
     };
+    let region = match &args.region {
+        Some(text) => {
+            if args.history == HistoryChoice::Always {
+                return Err(Failure::bad_input(
+                    "--region writes no history: a pruned complex has only what primary views \
+                     from the box need (drop --history always)",
+                ));
+            }
+            Some(parse_region("--region", text)?)
+        }
+        None => None,
+    };
     let write_history = args.output.is_some()
+        && region.is_none()
         && match args.history {
             HistoryChoice::Never => false,
             HistoryChoice::Auto => args.method != Some(Method::Sweep) && needs_history(&scene),
@@ -192,13 +246,30 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     } else {
         args.method.unwrap_or(Method::Ric)
     };
-    let built = build_with(&args.scene, &scene, method, &options)?;
+    let mut built = build_with(&args.scene, &scene, method, &options)?;
+    let full_cylinders = built.complex.cylinders().len();
+    if let Some(r) = region {
+        built.complex = built
+            .complex
+            .prune_to_region(&scene, r)
+            .map_err(|e| Failure::bad_input(format!("{}: --region: {e}", args.scene.display())))?;
+        // The pruned complex passes the checks a loader runs on it.
+        built.complex.validate(&scene).map_err(|e| Failure {
+            message: format!("{}: internal: pruned complex: {e}", args.scene.display()),
+            code: EXIT_INTERNAL,
+        })?;
+    }
     let written = match &args.output {
         Some(out) => Some((out, write_vcx(out, &scene, &built, write_history, args)?)),
         None => None,
     };
     let text = if args.stats_json {
         let mut stats = stats_json(scene.len(), &built);
+        if let Some(r) = built.complex.region() {
+            let ((x0, y0), (x1, y1)) = (r.min().to_f64(), r.max().to_f64());
+            stats["region"] = json!([x0, y0, x1, y1]);
+            stats["full_cylinders"] = json!(full_cylinders);
+        }
         if let Some((_, (bytes, history))) = written {
             stats["file_bytes"] = json!(bytes);
             stats["file_history_bytes"] = json!(history);
@@ -208,6 +279,13 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         line
     } else {
         let mut line = summary(&args.scene, scene.len(), &built);
+        if let Some(r) = built.complex.region() {
+            let ((x0, y0), (x1, y1)) = (r.min().to_f64(), r.max().to_f64());
+            line.push_str(&format!(
+                "; region {x0},{y0},{x1},{y1}: kept {} of {full_cylinders} cylinders",
+                built.complex.cylinders().len()
+            ));
+        }
         if let Some((out, (bytes, history))) = written {
             let history = history.map_or(String::new(), |h| format!(", history {h} bytes"));
             line.push_str(&super::one_line(&format!(
@@ -229,23 +307,38 @@ fn write_vcx(
     with_history: bool,
     args: &Args,
 ) -> Result<(usize, Option<usize>), Failure> {
+    let bytes = encode_vcx(&args.scene, scene, built, with_history, args.seed)?;
+    std::fs::write(out, &bytes)
+        .map_err(|e| Failure::bad_input(format!("cannot write {}: {e}", out.display())))?;
+    Ok((bytes.len(), history_part_bytes(&bytes)))
+}
+
+/// The bytes `vcx build PATH -o FILE` writes (`seed`: of the randomized construction);
+/// also measured by `vcx bench figures`.
+pub(crate) fn encode_vcx(
+    path: &Path,
+    scene: &SceneRef<'_>,
+    built: &Built,
+    with_history: bool,
+    seed: u64,
+) -> Result<Vec<u8>, Failure> {
     let options = vcx::format::EncodeOptions {
-        seed: built.history.is_some().then_some(args.seed),
+        seed: built.history.is_some().then_some(seed),
         compacted: built.history.is_some(),
     };
     let history = built.history.as_ref().filter(|_| with_history);
-    let bytes =
-        vcx::format::encode(scene, &built.complex, history, &options).map_err(|e| Failure {
-            message: format!("{}: internal: cannot encode: {e}", args.scene.display()),
-            code: EXIT_INTERNAL,
-        })?;
-    std::fs::write(out, &bytes)
-        .map_err(|e| Failure::bad_input(format!("cannot write {}: {e}", out.display())))?;
-    let history_bytes = match vcx::format::Header::read_unchecked(&bytes) {
+    vcx::format::encode(scene, &built.complex, history, &options).map_err(|e| Failure {
+        message: format!("{}: internal: cannot encode: {e}", path.display()),
+        code: EXIT_INTERNAL,
+    })
+}
+
+/// The history part's length in an encoded file, if it has one.
+pub(crate) fn history_part_bytes(bytes: &[u8]) -> Option<usize> {
+    match vcx::format::Header::read_unchecked(bytes) {
         Ok(h) if h.has_history() => Some(h.history_bytes as usize),
         _ => None,
-    };
-    Ok((bytes.len(), history_bytes))
+    }
 }
 
 /// The `--stats-json` object.

@@ -20,8 +20,11 @@
 //! L links, depth D (b bytes per node)`, the depth being the longest root-to-leaf path of
 //! the decoded DAG (`History::stats`).
 //!
+//! A file pruned to a region (`vcx build --region`, format version 2) has a line
+//! `region   viewpoints in X0,Y0,X1,Y1 only (a pruned complex)` after the first.
+//!
 //! With `--json` one object: `file`, `version`, `bytes`, `seed` (or null), `compacted`,
-//! `parts` — `header`, `scene`, `complex`, `history` (null when absent; else `bytes`,
+//! `region` (`[x0, y0, x1, y1]`, or null), `parts` — `header`, `scene`, `complex`, `history` (null when absent; else `bytes`,
 //! `nodes`, `links`, `depth`), `checksum` — each with its `bytes` and its counts, and
 //! `checksum_value` as a hex string.
 
@@ -55,19 +58,54 @@ fn grouped(n: u64) -> String {
     out
 }
 
+/// What `vcx inspect` reports of a file besides its length.
+pub(crate) struct Described {
+    /// The header (counts and part lengths).
+    pub header: Header,
+    /// The depth of the decoded history, if the file stores one.
+    pub depth: Option<usize>,
+    /// The stored CRC-32.
+    pub crc: u32,
+    /// The region the complex is pruned to (`vcx build --region`, version 2), if any.
+    pub region: Option<vcx::partition::Region>,
+}
+
+/// Decodes and validates a file's bytes and describes them (also used by `vcx bench
+/// figures` on the bytes `vcx build -o` would write).
+pub(crate) fn describe(bytes: &[u8]) -> Result<Described, vcx::format::FormatError> {
+    let header = Header::read(bytes)?;
+    let loaded = crate::input::decode_file(bytes)?;
+    let depth = loaded.history.as_ref().map(|h| h.stats().depth);
+    let region = loaded.complex.region();
+    let crc = bytes
+        .get(bytes.len().saturating_sub(CHECKSUM_LEN)..)
+        .and_then(|t| <[u8; 4]>::try_from(t).ok())
+        .map_or(0, u32::from_le_bytes);
+    Ok(Described {
+        header,
+        depth,
+        crc,
+        region,
+    })
+}
+
 /// Reads, validates and describes the file.
 pub fn run(args: &Args) -> Result<(), Failure> {
     let path = &args.file;
     let bytes = std::fs::read(path)
         .map_err(|e| Failure::bad_input(format!("cannot read {}: {e}", path.display())))?;
     let fail = |e: vcx::format::FormatError| crate::input::vcx_error(path, &e);
-    let header = Header::read(&bytes).map_err(fail)?;
-    let loaded = crate::input::decode_file(&bytes).map_err(fail)?;
-    let depth = loaded.history.as_ref().map(|h| h.stats().depth);
-    let crc = bytes
-        .get(bytes.len().saturating_sub(CHECKSUM_LEN)..)
-        .and_then(|t| <[u8; 4]>::try_from(t).ok())
-        .map_or(0, u32::from_le_bytes);
+    let Described {
+        header,
+        depth,
+        crc,
+        region,
+    } = describe(&bytes).map_err(fail)?;
+    // The region as `x0,y0,x1,y1` in scene units (exact: the grid is 2⁻¹⁶).
+    let corners = region.map(|r| {
+        let ((x0, y0), (x1, y1)) = (r.min().to_f64(), r.max().to_f64());
+        [x0, y0, x1, y1]
+    });
     let h = &header;
     let text = if args.json {
         let v = json!({
@@ -76,6 +114,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             "bytes": bytes.len(),
             "seed": h.seed,
             "compacted": h.compacted,
+            "region": corners,
             "parts": {
                 "header": {"bytes": HEADER_LEN},
                 "scene": {
@@ -121,6 +160,11 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             h.seed.map_or("not recorded".to_string(), |s| s.to_string()),
             if h.compacted { "yes" } else { "no" },
         );
+        if let Some([x0, y0, x1, y1]) = corners {
+            t.push_str(&format!(
+                "  region   viewpoints in {x0},{y0},{x1},{y1} only (a pruned complex)\n"
+            ));
+        }
         t.push_str(&format!("  header   {:>9} bytes\n", range(Part::Header)));
         t.push_str(&format!(
             "  scene    {:>9} bytes  {} objects, {} vertices\n",

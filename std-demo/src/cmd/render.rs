@@ -27,8 +27,8 @@ use std::path::PathBuf;
 use vcx::geom::sos::Angle;
 use vcx::partition::point_in_scene;
 use vcx::render::{coverage, hit_along, Camera, Interval, Piece};
-use vcx::walk::{ray_tree, view};
-use vcx::{Material, ObjectId, QueryPoint, SceneRef, SubScene};
+use vcx::walk::{ray_tree_range, view};
+use vcx::{Material, ObjectId, SceneRef, SubScene};
 use vcx_demo::SceneFile;
 
 use super::build::{build_checked, EXIT_INTERNAL};
@@ -118,12 +118,14 @@ impl Interval for Seen {
 
 /// The view (depth 0, complex without screens) or ray tree (depth > 0, whole complex)
 /// from `q`, with whole-scene ids. `sub_complex` is over the scene without screens.
+/// Ray trees are walked over the camera's field of view only.
 pub fn intervals(
     scene: &SceneRef<'_>,
     complex: &vcx::partition::Complex,
-    q: QueryPoint,
+    camera: &Camera,
     depth: usize,
 ) -> Result<Vec<Seen>, vcx::walk::WalkError> {
+    let q = camera.eye();
     if depth == 0 {
         let sub = non_screens(scene);
         let v = view(complex, &sub.as_ref(), q)?;
@@ -135,7 +137,8 @@ pub fn intervals(
             })
             .collect())
     } else {
-        Ok(ray_tree(complex, scene, q, depth)?
+        let (from, to) = camera.range();
+        Ok(ray_tree_range(complex, scene, q, depth, from, to)?
             .into_iter()
             .map(|t| Seen {
                 exact: t.exact_start,
@@ -191,7 +194,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     } else {
         build_checked(&args.scene, &scene)?
     };
-    let seen = intervals(&scene, &built.complex, q, args.depth).map_err(|e| Failure {
+    let seen = intervals(&scene, &built.complex, &camera, args.depth).map_err(|e| Failure {
         message: format!(
             "{}: internal: view from {}: {e}",
             args.scene.display(),

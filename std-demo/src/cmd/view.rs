@@ -40,7 +40,8 @@
 //!
 //! Errors (exit status 2, one `error: ` line): malformed or out-of-range numbers, an
 //! unreadable at-file or a bad line in it, a `--depth` that is not 0 to 16, and a viewpoint inside
-//! or on the boundary of an object — screens included, which the line names.
+//! or on the boundary of an object — screens included, which the line names — or, with a
+//! `.vcx` file pruned to a region (`vcx build --region`), outside that region.
 
 use core::f64::consts::TAU;
 use std::path::{Path, PathBuf};
@@ -187,13 +188,16 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let mut text = String::new();
     for (i, p) in points.iter().enumerate() {
         if depth > 0 {
-            let tree = ray_tree(&built.complex, &scene, p.q, depth).map_err(|e| Failure {
-                message: format!(
-                    "{}: internal: ray tree from {}: {e}",
-                    args.scene.display(),
-                    p.at
-                ),
-                code: EXIT_INTERNAL,
+            let tree = ray_tree(&built.complex, &scene, p.q, depth).map_err(|e| match e {
+                WalkError::OutsideRegion(_) => outside(&args.scene, p, &e),
+                e => Failure {
+                    message: format!(
+                        "{}: internal: ray tree from {}: {e}",
+                        args.scene.display(),
+                        p.at
+                    ),
+                    code: EXIT_INTERNAL,
+                },
             })?;
             let full = tree_rows(&scene, &tree);
             emit(args, file, p, i, range, full, &mut text);
@@ -213,6 +217,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
                 };
                 return Err(located(&args.scene, p, file, l));
             }
+            Err(e @ WalkError::OutsideRegion(_)) => return Err(outside(&args.scene, p, &e)),
             Err(e) => {
                 return Err(Failure {
                     message: format!(
@@ -228,6 +233,12 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         emit(args, file, p, i, range, full, &mut text);
     }
     write_stdout(&text)
+}
+
+/// A viewpoint outside the region a `.vcx` file was pruned to (`vcx build --region`): bad
+/// input, exit status 2.
+fn outside(path: &Path, p: &Viewpoint, e: &WalkError) -> Failure {
+    Failure::bad_input(format!("{}: viewpoint {}: {e}", path.display(), p.at))
 }
 
 /// Deepest ray tree the command computes.

@@ -1,0 +1,204 @@
+//! `vcx build --region X0,Y0,X1,Y1`, run as the built binary: the pruned file is smaller,
+//! `vcx inspect` shows its region, `vcx view` from inside the box prints exactly what the
+//! full file prints, from outside it fails with one `error:` line and exit status 2, as do
+//! every refused combination (history, mirrors, a malformed or empty box); `vcx bench
+//! views` draws its viewpoints in the region.
+
+use core::sync::atomic::{AtomicUsize, Ordering};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+const VCX: &str = env!("CARGO_BIN_EXE_vcx");
+
+/// A fresh path in a per-process temporary directory.
+fn temp_path(name: &str) -> PathBuf {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let dir = std::env::temp_dir().join(format!("vcx-cli-region-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    dir.join(format!("{n}-{name}"))
+}
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(format!("{name}.json"))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn vcx(args: &[&str]) -> Output {
+    Command::new(VCX).args(args).output().unwrap()
+}
+
+/// Requires exit 0 and empty stderr; returns stdout.
+fn ok(args: &[&str]) -> String {
+    let out = vcx(args);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+    assert!(stderr.is_empty(), "{args:?}: {stderr}");
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Requires exit 2, empty stdout and one `error: ` line containing every string of
+/// `expect`.
+fn fails(args: &[&str], expect: &[&str]) {
+    let out = vcx(args);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(out.stdout.is_empty(), "{args:?}: stdout not empty");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+    assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    for e in expect {
+        assert!(stderr.contains(e), "{args:?}: {e:?} not in {stderr}");
+    }
+}
+
+fn json(text: &str) -> Value {
+    serde_json::from_str(text.trim()).unwrap()
+}
+
+/// The grid example scene (64 opaque triangles in 0..80 × 0..80), full and pruned to a
+/// box of about a sixteenth of its area.
+fn files() -> (PathBuf, PathBuf) {
+    let scene = example("grid");
+    let (full, reg) = (temp_path("full.vcx"), temp_path("region.vcx"));
+    ok(&["build", s(&scene), "--method", "sweep", "-o", s(&full)]);
+    let line = ok(&["build", s(&scene), "--region", "30,30,50,50", "-o", s(&reg)]);
+    assert!(line.contains("region 30,30,50,50: kept"), "{line}");
+    (full, reg)
+}
+
+#[test]
+fn region_file_is_smaller_and_inspect_shows_it() {
+    let (full, reg) = files();
+    let (a, b) = (
+        std::fs::metadata(&full).unwrap().len(),
+        std::fs::metadata(&reg).unwrap().len(),
+    );
+    assert!(b < a / 2, "{b} bytes pruned, {a} full");
+    let text = ok(&["inspect", s(&reg)]);
+    assert!(text.contains("format version 2"), "{text}");
+    assert!(
+        text.contains("region   viewpoints in 30,30,50,50 only"),
+        "{text}"
+    );
+    assert!(text.contains("history  absent"), "{text}");
+    let v = json(&ok(&["inspect", s(&reg), "--json"]));
+    assert_eq!(v["version"], 2);
+    assert_eq!(v["region"], serde_json::json!([30.0, 30.0, 50.0, 50.0]));
+    let v = json(&ok(&["inspect", s(&full), "--json"]));
+    assert_eq!(v["version"], 1);
+    assert_eq!(v["region"], Value::Null);
+    // --stats-json reports both counts.
+    let stats = json(&ok(&[
+        "build",
+        s(&example("grid")),
+        "--region",
+        "30,30,50,50",
+        "--stats-json",
+    ]));
+    assert!(stats["cylinders"].as_u64().unwrap() < stats["full_cylinders"].as_u64().unwrap());
+    assert_eq!(stats["region"], serde_json::json!([30.0, 30.0, 50.0, 50.0]));
+}
+
+#[test]
+fn views_inside_equal_the_full_file_and_outside_fail() {
+    let (full, reg) = files();
+    // Inside, on the edges and at the corners of the box.
+    for at in [
+        "40.5,40.25",
+        "30,30",
+        "50,50",
+        "30,50",
+        "50,30",
+        "30,41.125",
+        "44.75,50",
+        "33.3,47.7",
+    ] {
+        let a = vcx(&["view", s(&full), "--at", at, "--json"]);
+        let b = vcx(&["view", s(&reg), "--at", at, "--json"]);
+        assert_eq!(a.status.code(), b.status.code(), "{at}");
+        if a.status.code() == Some(0) {
+            // The file name is in the output: compare the views.
+            let (va, vb) = (
+                json(&String::from_utf8(a.stdout).unwrap()),
+                json(&String::from_utf8(b.stdout).unwrap()),
+            );
+            assert_eq!(va["intervals"], vb["intervals"], "{at}");
+            assert!(va["intervals"].as_array().is_some_and(|v| !v.is_empty()));
+        }
+    }
+    for at in ["29.99,40", "50.01,40", "40,29.5", "40,60", "0.5,0.5"] {
+        fails(
+            &["view", s(&reg), "--at", at],
+            &["viewpoint", "outside the region 30,30,50,50"],
+        );
+    }
+}
+
+#[test]
+fn refused_combinations() {
+    let grid = example("grid");
+    let out = temp_path("x.vcx");
+    fails(
+        &[
+            "build",
+            s(&grid),
+            "--region",
+            "30,30,50,50",
+            "--history",
+            "always",
+            "-o",
+            s(&out),
+        ],
+        &["--region", "no history"],
+    );
+    fails(
+        &["build", s(&example("hall")), "--region", "1,1,2,2"],
+        &["--region", "not opaque"],
+    );
+    for (bad, why) in [
+        ("1,2,3", "3 numbers"),
+        ("1,2,3,x", "not four numbers"),
+        ("5,0,1,1", "X0 ≤ X1"),
+        ("0,0,1,1e9", "outside"),
+    ] {
+        fails(&["build", s(&grid), "--region", bad], &["--region", why]);
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn bench_views_draws_points_in_the_region() {
+    let (full, reg) = files();
+    let a = json(&ok(&[
+        "bench",
+        "views",
+        s(&full),
+        "--region",
+        "30,30,50,50",
+        "--random",
+        "20",
+        "--repeat",
+        "1",
+    ]));
+    let b = json(&ok(&[
+        "bench",
+        "views",
+        s(&reg),
+        "--random",
+        "20",
+        "--repeat",
+        "1",
+    ]));
+    assert_eq!(a["views"], b["views"]);
+    assert_eq!(a["events_per_view"], b["events_per_view"]);
+    assert_eq!(a["intervals_per_view"], b["intervals_per_view"]);
+    assert!(b["cylinders"].as_u64().unwrap() < a["cylinders"].as_u64().unwrap());
+}

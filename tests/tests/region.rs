@@ -1,0 +1,679 @@
+//! `vcx build --region` (`vcx::partition::region`): a complex pruned to a box of viewpoints.
+//! Views from viewpoints in the box — inside, on its edges and at its corners — walked in
+//! the pruned complex equal the full complex's and the exact reference's, on random grid
+//! scenes and random boxes and on the degenerate scenes of the fuzz generators; outside
+//! the box they are a typed error; a walk that meets a missing link stops with an error;
+//! the version-2 file round-trips (both decoders) and its corrupt variants are typed
+//! errors, never panics.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use vcx::format::{self, decode, decode_into, encode, EncodeOptions, FormatError, Header};
+use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
+use vcx::partition::{
+    build_by_sweep, BorderBuffers, BorderSizes, Complex, ComplexError, Region, RegionError,
+};
+use vcx::walk::{view, view_into, ViewInterval, WalkError};
+use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
+use vcx_demo::{generate, SceneKind};
+use vcx_tests::generators::{compare_view, SceneSpec};
+
+/// Scale of the randomized checks: `VCX_LONG=1` multiplies it by 20.
+fn scale() -> usize {
+    if std::env::var_os("VCX_LONG").is_some() {
+        20
+    } else {
+        1
+    }
+}
+
+/// Views as comparable tuples: exact start direction, object, boundary vertex.
+type ViewKey = Vec<((i128, i128), Option<ObjectId>, Option<usize>)>;
+
+fn view_key<S: vcx::partition::Storage>(
+    c: &Complex<S>,
+    s: &SceneRef<'_>,
+    q: QueryPoint,
+) -> Result<ViewKey, WalkError> {
+    view(c, s, q).map(|v| {
+        v.iter()
+            .map(|i| (i.start.vector(), i.object, i.start_vertex))
+            .collect()
+    })
+}
+
+/// The scene's bounding box in raw scene units.
+fn bbox(s: &SceneRef<'_>) -> (i32, i32, i32, i32) {
+    let (mut x0, mut y0, mut x1, mut y1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
+    for p in s.vertices() {
+        (x0, y0, x1, y1) = (x0.min(p.x()), y0.min(p.y()), x1.max(p.x()), y1.max(p.y()));
+    }
+    (x0, y0, x1, y1)
+}
+
+fn region(x0: i32, y0: i32, x1: i32, y1: i32) -> Region {
+    Region::new(
+        Point::from_raw(x0, y0).unwrap(),
+        Point::from_raw(x1, y1).unwrap(),
+    )
+    .unwrap()
+}
+
+/// A random box inside the scene's bounding box (a margin of one unit around it): any
+/// size from a point to the whole, corners on the scene grid, often on whole units.
+fn random_box(s: &SceneRef<'_>, rng: &mut ChaCha8Rng) -> Region {
+    let (x0, y0, x1, y1) = bbox(s);
+    let m = 1 << 16;
+    let lim = vcx::geom::point::MAX_ABS_RAW;
+    let mut pick = |lo: i32, hi: i32| {
+        let v = rng.gen_range((lo - m).max(-lim)..=(hi + m).min(lim));
+        if rng.gen_bool(0.5) {
+            (v & !0xffff).max(-lim) // on a whole unit: on grid lines and vertices' rows
+        } else {
+            v
+        }
+    };
+    let (a, b) = (pick(x0, x1), pick(x0, x1));
+    let (c, d) = (pick(y0, y1), pick(y0, y1));
+    region(a.min(b), c.min(d), a.max(b), c.max(d))
+}
+
+/// Viewpoints in the closed box: its corners, points on each edge, random inside points.
+fn points_in(r: &Region, inside: usize, rng: &mut ChaCha8Rng) -> Vec<QueryPoint> {
+    let (lo, hi) = (r.min().to_query(), r.max().to_query());
+    let q = |x, y| QueryPoint::from_raw(x, y).unwrap();
+    let mut out = vec![
+        q(lo.x(), lo.y()),
+        q(hi.x(), lo.y()),
+        q(hi.x(), hi.y()),
+        q(lo.x(), hi.y()),
+    ];
+    for _ in 0..2 {
+        let (x, y) = (
+            rng.gen_range(lo.x()..=hi.x()),
+            rng.gen_range(lo.y()..=hi.y()),
+        );
+        out.extend([q(x, lo.y()), q(x, hi.y()), q(lo.x(), y), q(hi.x(), y)]);
+    }
+    for _ in 0..inside {
+        out.push(q(
+            rng.gen_range(lo.x()..=hi.x()),
+            rng.gen_range(lo.y()..=hi.y()),
+        ));
+    }
+    out
+}
+
+/// Points just outside the box (one query unit past each edge and corner) and far away.
+fn points_outside(r: &Region) -> Vec<QueryPoint> {
+    let (lo, hi) = (r.min().to_query(), r.max().to_query());
+    let (mx, my) = (lo.x() / 2 + hi.x() / 2, lo.y() / 2 + hi.y() / 2);
+    let q = |x, y| QueryPoint::from_raw(x, y).unwrap();
+    vec![
+        q(lo.x() - 1, my),
+        q(hi.x() + 1, my),
+        q(mx, lo.y() - 1),
+        q(mx, hi.y() + 1),
+        q(lo.x() - 1, lo.y() - 1),
+        q(hi.x() + 1, hi.y() + 1),
+        q(hi.x() + (1 << 40), my),
+    ]
+}
+
+/// Prunes `c` to `r` and checks every viewpoint of `points` (pruned views equal the full
+/// complex's; the first `reference` free ones also against the exact reference) and that
+/// points outside are refused. Returns how many free viewpoints were compared.
+fn check_box(
+    s: &SceneRef<'_>,
+    c: &Complex,
+    r: Region,
+    points: &[QueryPoint],
+    reference: usize,
+) -> usize {
+    let p = c.prune_to_region(s, r).unwrap();
+    p.validate(s)
+        .unwrap_or_else(|e| panic!("pruned complex invalid: {e}"));
+    assert_eq!(p.region(), Some(r));
+    assert!(p.cylinders().len() <= c.cylinders().len());
+    // The θ = 0 cylinders come first.
+    let prefix = p
+        .cylinders()
+        .iter()
+        .take_while(|c| c.left == vcx::partition::Wall::Zero)
+        .count();
+    assert!(p
+        .cylinders()
+        .iter()
+        .skip(prefix)
+        .all(|c| c.left != vcx::partition::Wall::Zero));
+    let sub = SubScene::new(*s, (0..s.len() as u32).map(ObjectId));
+    let mut compared = 0;
+    for &q in points {
+        assert!(r.contains(q));
+        let full = view_key(c, s, q);
+        let got = view_key(&p, s, q);
+        match (&full, &got) {
+            (Err(WalkError::NotFree(a)), Err(WalkError::NotFree(b))) => {
+                assert_eq!(a, b);
+                continue;
+            }
+            (Ok(f), Ok(g)) => assert_eq!(f, g, "view from {q:?} in box {r:?}"),
+            _ => panic!("q {q:?} in {r:?}: full {full:?}, pruned {got:?}"),
+        }
+        if compared < reference {
+            compare_view(s, &sub, &p, q).unwrap_or_else(|e| panic!("box {r:?}: {e}"));
+        }
+        compared += 1;
+    }
+    for q in points_outside(&r) {
+        assert_eq!(
+            view(&p, s, q).map(|v| v.len()),
+            Err(WalkError::OutsideRegion(r)),
+            "q {q:?} outside {r:?}"
+        );
+    }
+    compared
+}
+
+#[test]
+fn grid_views_in_the_box_equal_full_and_reference() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut compared = 0;
+    for (n, seed) in [(16, 1), (16, 2), (32, 3), (64, 1), (64, 4)] {
+        let f = generate(SceneKind::Grid, n, seed).unwrap();
+        let s = f.scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        for _ in 0..6 * scale() {
+            let r = random_box(&s, &mut rng);
+            let points = points_in(&r, 12, &mut rng);
+            compared += check_box(&s, &c, r, &points, 4);
+        }
+    }
+    assert!(compared > 200, "only {compared} free viewpoints");
+}
+
+/// Boxes whose corners and edges lie on the scene's vertices, edges and their extensions.
+#[test]
+fn boxes_through_vertices() {
+    let f = generate(SceneKind::Grid, 16, 9).unwrap();
+    let s = f.scene.as_ref();
+    let c = build_by_sweep(&s).unwrap();
+    let v = s.vertices();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut compared = 0;
+    for _ in 0..12 * scale() {
+        let (a, b) = (v[rng.gen_range(0..v.len())], v[rng.gen_range(0..v.len())]);
+        let r = region(
+            a.x().min(b.x()),
+            a.y().min(b.y()),
+            a.x().max(b.x()),
+            a.y().max(b.y()),
+        );
+        // The vertices themselves are on objects (not free); points on the box's edges
+        // pass along the objects' vertices' rows and columns.
+        let points = points_in(&r, 6, &mut rng);
+        compared += check_box(&s, &c, r, &points, 2);
+    }
+    // A box that is a single free point, and a segment.
+    let (x0, y0, x1, y1) = bbox(&s);
+    for r in [
+        region(x0 - (1 << 16), y0, x0 - (1 << 16), y0),
+        region(x0, (y0 + y1) / 2, x1, (y0 + y1) / 2),
+    ] {
+        let points = points_in(&r, 6, &mut rng);
+        compared += check_box(&s, &c, r, &points, 2);
+    }
+    assert!(compared > 50, "only {compared}");
+}
+
+/// The degenerate scenes of the fuzz generators (collinear lattices, slivers, extreme
+/// coordinates), made opaque.
+#[test]
+fn degenerate_scenes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut done = 0;
+    for _ in 0..600 * scale() {
+        let len = rng.gen_range(16..600);
+        let raw: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
+        let Some(spec) = vcx_tests::generators::decode::<SceneSpec>(&raw) else {
+            continue;
+        };
+        let Ok(s) = spec.realize().scene() else {
+            continue;
+        };
+        let sr = s.as_ref();
+        let polys: Vec<Vec<Point>> = sr
+            .objects()
+            .iter()
+            .map(|o| {
+                let p = sr.polygon(o);
+                (0..p.len()).map(|j| p[o.written_vertex_id(j)]).collect()
+            })
+            .collect();
+        let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+        let sr = s.as_ref();
+        if sr.is_empty() {
+            continue;
+        }
+        let c = build_by_sweep(&sr).unwrap();
+        for _ in 0..2 {
+            let r = random_box(&sr, &mut rng);
+            let points = points_in(&r, 4, &mut rng);
+            check_box(&sr, &c, r, &points, 2);
+        }
+        done += 1;
+        if done == 60 * scale() {
+            break;
+        }
+    }
+    assert!(done >= 30, "only {done} degenerate scenes");
+}
+
+#[test]
+fn pruning_refuses_secondary_rays_and_pruned_complexes() {
+    let sq = |x: i32| {
+        [
+            Point::from_raw(x << 16, 0).unwrap(),
+            Point::from_raw((x + 1) << 16, 0).unwrap(),
+            Point::from_raw((x + 1) << 16, 1 << 16).unwrap(),
+        ]
+    };
+    let (a, b) = (sq(0), sq(3));
+    let r = region(0, 0, 1 << 16, 1 << 16);
+    for m in [
+        Material::Mirror,
+        Material::Screen,
+        Material::Refractive {
+            eta: vcx::Eta::from_f64(1.5).unwrap(),
+        },
+    ] {
+        let s = Scene::new([(Material::Opaque, &a[..]), (m, &b[..])]).unwrap();
+        let c = build_by_sweep(&s.as_ref()).unwrap();
+        assert_eq!(
+            c.prune_to_region(&s.as_ref(), r).unwrap_err(),
+            RegionError::SecondaryRays { object: 1 }
+        );
+    }
+    let s = Scene::new([(Material::Opaque, &a[..]), (Material::Opaque, &b[..])]).unwrap();
+    let c = build_by_sweep(&s.as_ref()).unwrap();
+    let p = c.prune_to_region(&s.as_ref(), r).unwrap();
+    assert_eq!(
+        p.prune_to_region(&s.as_ref(), r).unwrap_err(),
+        RegionError::AlreadyPruned
+    );
+}
+
+/// The pruned complex of a grid scene, its scene, its region and a free viewpoint in it.
+fn pruned_grid(n: u32) -> (Scene, Complex, Complex, Region) {
+    let f = generate(SceneKind::Grid, n, 5).unwrap();
+    let s = f.scene;
+    let c = build_by_sweep(&s.as_ref()).unwrap();
+    let (x0, y0, x1, y1) = bbox(&s.as_ref());
+    let (w, h) = ((x1 - x0) / 4, (y1 - y0) / 4);
+    let r = region(x0 + w, y0 + h, x1 - w, y1 - h);
+    let p = c.prune_to_region(&s.as_ref(), r).unwrap();
+    (s, c, p, r)
+}
+
+/// A link the walk needs, removed from a pruned complex that still validates: the walk
+/// stops with `Corrupt` (never a panic, a loop or a wrong view).
+#[test]
+fn a_missing_link_stops_the_walk() {
+    let (s, _, p, r) = pruned_grid(16);
+    let sr = s.as_ref();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let mut cut = 0;
+    for q in points_in(&r, 40, &mut rng) {
+        // The first secondary wall the walk crosses after its start.
+        let (mut crossing, mut steps) = (None, 0);
+        let walked = p.walk_trace(&sr, q, |st| {
+            if crossing.is_none() && steps > 0 && st.vertex.is_none() {
+                crossing = Some(st.cylinder);
+            }
+            steps += 1;
+        });
+        let (Ok(()), Some(to)) = (walked, crossing) else {
+            continue;
+        };
+        let mut cylinders = p.cylinders().to_vec();
+        let from = cylinders[to.index()].left_neighbour.unwrap();
+        cylinders[to.index()].left_neighbour = None;
+        cylinders[from.index()].right_neighbour = None;
+        let broken = Complex::from_region_parts(&sr, Some(r), p.vertices().to_vec(), cylinders)
+            .expect("still a valid pruned complex");
+        assert_eq!(
+            view(&broken, &sr, q).map(|v| v.len()),
+            Err(WalkError::Corrupt)
+        );
+        cut += 1;
+    }
+    assert!(cut > 5, "only {cut} walks crossed a secondary wall");
+}
+
+/// A cylinder the walk needs, dropped: `Corrupt`, or the view is still right (another
+/// walk did not need it).
+#[test]
+fn a_missing_cylinder_stops_the_walk() {
+    let (s, c, p, r) = pruned_grid(16);
+    let sr = s.as_ref();
+    // Drop the last cylinder (no renumbering needed) and the links to it.
+    let mut cylinders = p.cylinders().to_vec();
+    let last = cylinders.len() - 1;
+    cylinders.pop();
+    for c in &mut cylinders {
+        for l in [&mut c.left_neighbour, &mut c.right_neighbour] {
+            if l.is_some_and(|l| l.index() == last) {
+                *l = None;
+            }
+        }
+    }
+    let broken = match Complex::from_region_parts(&sr, Some(r), p.vertices().to_vec(), cylinders) {
+        Ok(b) => b,
+        // A vertex only that cylinder named: the pruned checks see it.
+        Err(e) => return assert_eq!(e, ComplexError::Count),
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let mut failed = 0;
+    for q in points_in(&r, 200, &mut rng) {
+        match view_key(&broken, &sr, q) {
+            Ok(v) => assert_eq!(Ok(v), view_key(&c, &sr, q)),
+            Err(WalkError::Corrupt) => failed += 1,
+            Err(WalkError::NotFree(_)) => {}
+            Err(e) => panic!("{e:?}"),
+        }
+    }
+    assert!(failed > 0, "no walk needed the dropped cylinder");
+}
+
+/// Encoded as version 2 with the region; both decoders give it back, and the allocation-
+/// free one walks the same views once told the region.
+#[test]
+fn region_files_round_trip() {
+    let (s, c, p, r) = pruned_grid(32);
+    let sr = s.as_ref();
+    let bytes = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
+    let full = encode(&sr, &c, None, &EncodeOptions::default()).unwrap();
+    assert!(bytes.len() < full.len());
+    assert_eq!(
+        u16::from_le_bytes([bytes[4], bytes[5]]),
+        format::VERSION_REGION
+    );
+    assert_eq!(u16::from_le_bytes([full[4], full[5]]), format::VERSION);
+    let h = Header::read(&bytes).unwrap();
+    assert!(h.region && !h.has_history());
+    assert_eq!(h.cylinders as usize, p.cylinders().len());
+    let loaded = decode(&bytes).unwrap();
+    assert_eq!(loaded.complex.region(), Some(r));
+    assert_eq!(loaded.complex.cylinders(), p.cylinders());
+    assert_eq!(loaded.complex.vertices(), p.vertices());
+    // A history cannot go with a region.
+    let history = vcx::partition::History::build(&sr, &Default::default()).unwrap();
+    let hc = history
+        .complex(&sr)
+        .unwrap()
+        .prune_to_region(&sr, r)
+        .unwrap();
+    assert!(matches!(
+        encode(&sr, &hc, Some(&history), &EncodeOptions::default()),
+        Err(FormatError::NotEncodable(_))
+    ));
+
+    // No heap: decode into caller storage, rebuild the derived state, walk.
+    let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
+    let mut objects = vec![SceneObject::BLANK; n];
+    let mut points = vec![Point::default(); nv];
+    let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
+    let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
+    let d = decode_into::<1024, 64>(
+        &bytes,
+        Scratch {
+            objects: &mut objects,
+            points: &mut points,
+        },
+        &mut vertices,
+        &mut cylinders,
+    )
+    .unwrap();
+    assert_eq!(d.region, Some(r));
+    let ds = d.scene.as_ref();
+    let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
+    let mut angles = vec![vcx::geom::sos::Angle::ZERO; sizes.angles];
+    let mut ids = vec![vcx::partition::CylinderId::ZERO; sizes.ids];
+    let mut offsets = vec![0u32; sizes.offsets];
+    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
+    let buffers = BorderBuffers {
+        angles: &mut angles,
+        ids: &mut ids,
+        offsets: &mut offsets,
+        start: &mut start,
+    };
+    let slices = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers)
+        .unwrap()
+        .with_region(d.region);
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let mut out = vec![
+        ViewInterval {
+            start: vcx::geom::sos::Angle::ZERO,
+            object: None,
+            start_vertex: None,
+        };
+        vcx::walk::view_capacity(n)
+    ];
+    let mut walked = 0;
+    for q in points_in(&r, 30, &mut rng) {
+        let Ok(k) = view_into(&slices, &ds, q, &mut out) else {
+            continue;
+        };
+        let got: ViewKey = out[..k]
+            .iter()
+            .map(|i| (i.start.vector(), i.object, i.start_vertex))
+            .collect();
+        assert_eq!(Ok(got), view_key(&c, &sr, q));
+        walked += 1;
+    }
+    assert!(walked > 10);
+    for q in points_outside(&r) {
+        assert_eq!(
+            view_into(&slices, &ds, q, &mut out),
+            Err(WalkError::OutsideRegion(r))
+        );
+    }
+}
+
+/// `decode_into`, the derived state rebuilt into caller buffers, a view walked (no heap
+/// for the walk); any failure is fine, a panic is not.
+fn walk_decoded_into(bytes: &[u8], q: QueryPoint) {
+    let Ok(h) = Header::read(bytes) else { return };
+    if h.objects > 64 || h.scene_vertices > 256 || h.cylinders > 4096 {
+        return;
+    }
+    let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
+    let mut objects = vec![SceneObject::BLANK; n];
+    let mut points = vec![Point::default(); nv];
+    let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
+    let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
+    let Ok(d) = decode_into::<256, 64>(
+        bytes,
+        Scratch {
+            objects: &mut objects,
+            points: &mut points,
+        },
+        &mut vertices,
+        &mut cylinders,
+    ) else {
+        return;
+    };
+    let ds = d.scene.as_ref();
+    let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
+    let mut angles = vec![vcx::geom::sos::Angle::ZERO; sizes.angles];
+    let mut ids = vec![vcx::partition::CylinderId::ZERO; sizes.ids];
+    let mut offsets = vec![0u32; sizes.offsets];
+    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
+    let buffers = BorderBuffers {
+        angles: &mut angles,
+        ids: &mut ids,
+        offsets: &mut offsets,
+        start: &mut start,
+    };
+    let Ok(c) = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers) else {
+        return;
+    };
+    let c = c.with_region(d.region);
+    let mut out = vec![
+        ViewInterval {
+            start: vcx::geom::sos::Angle::ZERO,
+            object: None,
+            start_vertex: None,
+        };
+        vcx::walk::view_capacity(n)
+    ];
+    let _ = view_into(&c, &ds, q, &mut out);
+}
+
+fn reseal(bytes: &mut [u8]) {
+    let at = bytes.len() - format::CHECKSUM_LEN;
+    let crc = format::crc32(&bytes[..at]);
+    bytes[at..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// A small region file: every truncation and every single-bit flip (checksum kept, and
+/// recomputed so the structural checks are what is tested) is an error or, with the
+/// checksum recomputed, a file that loads and walks without panicking; and the specific
+/// region errors name what is wrong.
+#[test]
+fn corrupt_region_files() {
+    let f = generate(SceneKind::Grid, 4, 3).unwrap();
+    let s = f.scene;
+    let sr = s.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let (x0, y0, x1, y1) = bbox(&sr);
+    let r = region(x0, y0, (x0 + x1) / 2, (y0 + y1) / 2);
+    let p = c.prune_to_region(&sr, r).unwrap();
+    let bytes = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
+    assert_eq!(decode(&bytes).unwrap().complex.cylinders(), p.cylinders());
+    let q = QueryPoint::from_raw((i64::from(x0) << 16) + 3, (i64::from(y0) << 16) + 5).unwrap();
+    for len in 0..bytes.len() {
+        assert!(decode(&bytes[..len]).is_err(), "truncated to {len}");
+    }
+    for bit in 0..bytes.len() * 8 {
+        let mut b = bytes.clone();
+        b[bit / 8] ^= 1 << (bit % 8);
+        assert!(decode(&b).is_err(), "bit {bit} flipped");
+        reseal(&mut b);
+        if let Ok(l) = decode(&b) {
+            let _ = view(&l.complex, &l.scene.as_ref(), q);
+        }
+        // The device path checks less (no cross-section or count checks): walks of what
+        // it accepts must still end, with a view or an error.
+        walk_decoded_into(&b, q);
+    }
+
+    // The region's upper corner below its lower one (x1 < x0): x0 is the first varint of
+    // the complex part.
+    let h = Header::read(&bytes).unwrap();
+    let at = h.part_range(format::Part::Complex).start;
+    let b = bytes.clone();
+    // Rewrite the region as (0, 0, -1, 0): zigzag 0, 0, 1, 0 in one byte each, then the
+    // rest of the part as it was after the original region.
+    let mut pos = at;
+    for _ in 0..4 {
+        while b[pos] & 0x80 != 0 {
+            pos += 1;
+        }
+        pos += 1;
+    }
+    let mut edited = bytes[..at].to_vec();
+    edited.extend_from_slice(&[0, 0, 1, 0]);
+    edited.extend_from_slice(&b[pos..]);
+    let shrink = (pos - at - 4) as u32;
+    let complex_bytes = h.complex_bytes - shrink;
+    edited[format::offset::COMPLEX_BYTES..format::offset::COMPLEX_BYTES + 4]
+        .copy_from_slice(&complex_bytes.to_le_bytes());
+    reseal(&mut edited);
+    let e = decode(&edited).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FormatError::Element {
+                arena: format::Arena::Region,
+                field: "x1",
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+
+    // Version 2 without the region flag; version 1 with it.
+    let mut v = bytes.clone();
+    v[format::offset::FLAGS] &= !(format::FLAG_REGION as u8);
+    reseal(&mut v);
+    assert_eq!(decode(&v).unwrap_err(), FormatError::RegionFlagMissing);
+    let mut v = bytes.clone();
+    v[format::offset::VERSION] = 1;
+    reseal(&mut v);
+    assert!(matches!(
+        decode(&v).unwrap_err(),
+        FormatError::UnknownFlags { .. }
+    ));
+    // More cylinders than 3n + 1 + 3V.
+    let mut v = bytes.clone();
+    let full = 3 * h.objects + 1 + 3 * h.complex_vertices;
+    v[format::offset::CYLINDERS..format::offset::CYLINDERS + 4]
+        .copy_from_slice(&(full + 1).to_le_bytes());
+    reseal(&mut v);
+    assert!(matches!(
+        decode(&v).unwrap_err(),
+        FormatError::Count {
+            field: "cylinders",
+            ..
+        }
+    ));
+}
+
+/// How tight the conservative pruning is: kept cylinders against a lower bound of the
+/// needed ones (the cylinders walked from many viewpoints in the box). Prints a table;
+/// run with `--ignored --nocapture`.
+#[test]
+#[ignore]
+fn tightness_table() {
+    for n in [64, 256] {
+        let f = generate(SceneKind::Grid, n, 1).unwrap();
+        let s = f.scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let (x0, y0, x1, y1) = bbox(&s);
+        for k in [4, 16, 64] {
+            let f = (k as f64).sqrt();
+            let (w, h) = (
+                ((x1 - x0) as f64 / f / 2.0) as i32,
+                ((y1 - y0) as f64 / f / 2.0) as i32,
+            );
+            let (cx, cy) = (x0 / 2 + x1 / 2, y0 / 2 + y1 / 2);
+            let r = region(cx - w, cy - h, cx + w, cy + h);
+            let p = c.prune_to_region(&s, r).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(1);
+            let mut seen = vec![false; c.cylinders().len()];
+            let mut points = points_in(&r, 20_000, &mut rng);
+            // Dense points along the edges too.
+            let (lo, hi) = (r.min().to_query(), r.max().to_query());
+            for i in 0..=2000i64 {
+                let (x, y) = (
+                    lo.x() + (hi.x() - lo.x()) * i / 2000,
+                    lo.y() + (hi.y() - lo.y()) * i / 2000,
+                );
+                for (a, b) in [(x, lo.y()), (x, hi.y()), (lo.x(), y), (hi.x(), y)] {
+                    points.push(QueryPoint::from_raw(a, b).unwrap());
+                }
+            }
+            for q in points {
+                let _ = c.walk_trace(&s, q, |st| seen[st.cylinder.index()] = true);
+            }
+            let walked = seen.iter().filter(|&&b| b).count();
+            println!(
+                "n {n}, 1/{k} of the area: {} cylinders, kept {}, walked from 28,004 points {walked} ({:.1}% more kept)",
+                c.cylinders().len(),
+                p.cylinders().len(),
+                100.0 * (p.cylinders().len() as f64 / walked as f64 - 1.0)
+            );
+        }
+    }
+}
