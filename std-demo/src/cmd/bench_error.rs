@@ -488,7 +488,7 @@ pub fn run(a: &Args) -> Result<(), Failure> {
     }
     let mut text = format!(
         "{}: {} objects, depth {}, {} columns, {} frames, {:.1} intervals per frame\n\
-         complex: {:.1} µs per frame (360° ray tree {:.1}, coverage {:.1}), error 0\n\
+         complex: {:.1} µs per frame (ray tree over the field of view {:.1}, coverage {:.1}), error 0\n\
          {:>8} {:>14} {:>10} {:>10} {:>14} {:>10} {:>10}\n",
         a.scene.display(),
         m.objects,

@@ -111,7 +111,7 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
         }
         notes.push(format!(
             "* **{name}** (`vcx gen {name} {n} --seed {SEED}`, = `std-demo/scenes/{name}.json`: \
-             {} objects, {:.1} intervals per 360° tree, quadtree of {} nodes): complex {:.1} µs \
+             {} objects, {:.1} intervals per frame, quadtree of {} nodes): complex {:.1} µs \
              per frame (ray tree {:.1}, coverage {:.1}).\n  {}.\n  {}.",
             m.objects,
             m.intervals,
@@ -207,8 +207,8 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
             "The measurement of `vcx bench error SCENE --depth {d} --width {w} --samples {sa} \
              --frames {f} --repeat {r}` (`std-demo/src/cmd/bench_error.rs`; section \"Run time \
              against error\"): along {f} free viewpoints of a seeded walk, each 90° frame of \
-             {w} columns is rendered by the complex (the 360° ray tree to depth {d} plus the \
-             exact per-column coverage: the truth, error 0) and by the quadtree and BVH ray \
+             {w} columns is rendered by the complex (the ray tree to depth {d} over the field of view, plus \
+             the exact per-column coverage: the truth, error 0) and by the quadtree and BVH ray \
              casters with s stratified rays per column. µs per frame: the best of {r} runs of \
              each frame, median over the frames. Error: half the L1 distance between the \
              estimated and the exact coverage of a column, averaged over columns and frames; \
