@@ -135,12 +135,12 @@ impl Wide {
     }
 
     /// `u.0 · v.1 − u.1 · v.0`.
-    pub(crate) fn cross(u: (Wide, Wide), v: (i128, i128)) -> Option<Wide> {
+    pub(crate) fn cross(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
         u.0.mul_i128(v.1)?.sub(&u.1.mul_i128(v.0)?)
     }
 
     /// `u.0 · v.0 + u.1 · v.1`.
-    pub(crate) fn dot(u: (Wide, Wide), v: (i128, i128)) -> Option<Wide> {
+    pub(crate) fn dot(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
         u.0.mul_i128(v.0)?.add(&u.1.mul_i128(v.1)?)
     }
 }
@@ -326,8 +326,8 @@ mod tests {
             .unwrap();
         let a = x.sub(&w(2)).unwrap();
         let b = x.add(&w(2)).unwrap();
-        let xx = Wide::cross((x, a), (2, 1)).unwrap(); // x − 2a = −x + 4
+        let xx = Wide::cross(&(x, a), (2, 1)).unwrap(); // x − 2a = −x + 4
         assert_eq!(xx.add(&x).unwrap(), w(4));
-        assert_eq!(Wide::dot((a, b), (1, -1)).unwrap(), w(-4));
+        assert_eq!(Wide::dot(&(a, b), (1, -1)).unwrap(), w(-4));
     }
 }

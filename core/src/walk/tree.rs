@@ -77,7 +77,7 @@ impl Dir {
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly.
     fn turn(&self, v: (i128, i128)) -> Sign {
-        match self.exact.as_deref().and_then(|x| Wide::cross(*x, v)) {
+        match self.exact.as_deref().and_then(|x| Wide::cross(x, v)) {
             Some(c) => c.sign(),
             None => Sign::of_i128(cross(self.angle.vector(), v)),
         }
@@ -635,7 +635,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 .as_deref()
                 .copied()
                 .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
-            let den = Wide::cross(d, e)?;
+            let den = Wide::cross(&d, e)?;
             let num = cross(diff(a, hop.prev), e);
             let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
             let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
@@ -1266,7 +1266,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
         for st in (0..stages).rev() {
             let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
-            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, d));
+            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, &d));
             if let Some(slot) = mapped.get_mut(st) {
                 *slot = d;
             }
@@ -1294,7 +1294,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     })
                 });
             let hops = rule.hops.get(st..).unwrap_or(&[]);
-            let best = match mapped.get(st).copied().flatten() {
+            let best = match mapped.get(st).and_then(Option::as_ref) {
                 // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
                 _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
@@ -1340,7 +1340,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one of
     /// at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a 54-bit
     /// direction fit and the final cross with a query difference too.
-    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: (Wide, Wide)) -> Option<(Wide, Wide)> {
+    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
         let a = self.qpoint(hop.a);
         let e = diff(self.qpoint(hop.b), a);
         let den = Wide::cross(d, e)?;
