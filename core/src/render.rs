@@ -498,6 +498,22 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
     }
 }
 
+/// Rotates intervals listed counter-clockwise from a range's start (what
+/// [`crate::walk::view_range`] and [`crate::walk::ray_tree_range`] return) into start-angle
+/// order, the order [`coverage`] and [`centre_intervals`] take: the run wraps through θ = 0
+/// at most once, where the start angle drops by more than π (deep starts known in `f64`
+/// only may drop by rounding next to exact ones).
+pub fn angle_order<I: Interval>(intervals: &mut [I]) {
+    let wrap = intervals
+        .windows(2)
+        .position(|w| match w {
+            [a, b] => b.start_radians() < a.start_radians() - core::f64::consts::PI,
+            _ => false,
+        })
+        .map_or(0, |k| k + 1);
+    intervals.rotate_left(wrap);
+}
+
 /// The interval seen through the centre of each column (exactly, see [`interval_at`]),
 /// written into `out` (its first `min(out.len(), width)` columns).
 ///
@@ -718,7 +734,8 @@ fn unit_normal(poly: &[crate::Point], k: usize) -> Option<((f64, f64), (f64, f64
 /// Follows `branch` along the ray from `eye` in direction `dir` (`f64`, output only): the
 /// distance to the first object, the unfolded length to the last and how squarely the last
 /// stage meets it; `None` for an empty branch or a ray that misses the next object of the
-/// branch (rounding at a grazing boundary).
+/// branch (rounding at a grazing boundary), or a branch that continues past a mirror or
+/// refractive object when the cargo feature `mirrors` or `refraction` is off.
 pub fn hit_along(
     scene: &SceneRef<'_>,
     eye: QueryPoint,
@@ -748,9 +765,14 @@ pub fn hit_along(
         if level + 1 == branch.len() {
             break;
         }
+        // A ray type compiled out (cargo features `mirrors`, `refraction`) takes no branch
+        // past its objects (the ray tree is `WalkError::RayTypeDisabled`); `cfg!` keeps the
+        // arms type-checked, and the optimizer drops them.
         let (ne, np) = match obj.material {
-            Material::Mirror => (transform_eye_f64(e, p, nrm, -1.0), p),
-            Material::Refractive { eta } => {
+            Material::Mirror if cfg!(feature = "mirrors") => {
+                (transform_eye_f64(e, p, nrm, -1.0), p)
+            }
+            Material::Refractive { eta } if cfg!(feature = "refraction") => {
                 let eta = eta.to_f64();
                 let e1 = transform_eye_f64(e, p, nrm, eta);
                 let d1 = unit((p.0 - e1.0, p.1 - e1.1))?;

@@ -46,7 +46,7 @@ use vcx::geom::point::MAX_ABS_RAW;
 use vcx::geom::predicates::Direction;
 use vcx::geom::sos::Angle;
 use vcx::partition::{build_by_sweep, Complex, Location};
-use vcx::walk::{view, WalkError};
+use vcx::walk::{view, TreeInterval, WalkError};
 use vcx::{Eta, Material, ObjectId, Point, QueryPoint, Scene, SceneError, SceneRef, SubScene};
 
 use crate::reference::{self, RefError, Vec2};
@@ -1365,7 +1365,173 @@ pub fn compare_ray_tree(
             }
         }
     }
+    check_tree_ranges(s, c, q, depth, &got)?;
     Ok(true)
+}
+
+/// One interval of a restricted ray tree, in order from the range's start: branch and
+/// boundary vertex.
+pub type RangeRow = (Vec<ObjectId>, Option<usize>);
+
+/// The full ray tree `full` (sorted, cyclic) restricted to the primary directions
+/// counter-clockwise from `from` to `to` (the full circle if equal), as
+/// `walk::ray_tree_range` defines it: the interval containing `from` first (its vertex only
+/// if its start is exactly `from`), then every interval starting strictly inside the range,
+/// round to the containing interval's own start if the range reaches it again. Exact for
+/// exact (primary) starts; `None` when an `f64`-only start lies within 10⁻⁹ rad of an end
+/// (undecidable here).
+pub fn restricted(full: &[TreeInterval], from: Direction, to: Direction) -> Option<Vec<RangeRow>> {
+    use core::cmp::Ordering::{Equal, Less};
+    let tau = core::f64::consts::TAU;
+    let (fa, ta) = (Angle::constant(from), Angle::constant(to));
+    let (fr, tr) = (fa.radians(), ta.radians());
+    let near = |a: f64, b: f64| {
+        let d = (a - b).rem_euclid(tau);
+        d.min(tau - d) < 1e-9
+    };
+    if full.len() == 1 {
+        return Some(vec![(full[0].branch.clone(), None)]);
+    }
+    // Position counter-clockwise from `from` as (lap, angle): exact for exact starts, in
+    // radians for the others (undecidable next to an end).
+    #[derive(Clone, Copy)]
+    enum Pos {
+        Exact(u8, Angle),
+        Rel(f64),
+    }
+    let lap = |a: &Angle| u8::from(a.cmp_exact(&fa) == Less);
+    let pos: Vec<Pos> = full
+        .iter()
+        .map(|i| match i.exact_start {
+            Some(a) => Some(Pos::Exact(lap(&a), a)),
+            None if near(i.start, fr) || near(i.start, tr) => None,
+            None => Some(Pos::Rel((i.start - fr).rem_euclid(tau))),
+        })
+        .collect::<Option<_>>()?;
+    let full_circle = fa.cmp_exact(&ta) == Equal;
+    let lap_t = if full_circle { 1 } else { lap(&ta) };
+    let rel_t = if full_circle {
+        tau
+    } else {
+        (tr - fr).rem_euclid(tau)
+    };
+    let at_from = |p: &Pos| matches!(p, Pos::Exact(0, a) if a.cmp_exact(&fa) == Equal);
+    let inside = |p: &Pos| match p {
+        Pos::Exact(l, a) => *l < lap_t || (*l == lap_t && a.cmp_exact(&ta) == Less),
+        Pos::Rel(r) => *r < rel_t,
+    };
+    // The interval containing `from`: one starting on it, else the one starting last
+    // before it (counter-clockwise from `from`, the largest position).
+    let key = |p: &Pos| match p {
+        _ if at_from(p) => tau,
+        // The lap is exact: an `f64` tie with `from` goes to the right side.
+        Pos::Exact(l, a) => match ((a.radians() - fr).rem_euclid(tau), l) {
+            (r, 0) if r > tau - 1e-9 => 0.0,
+            (r, 1) if r < 1e-9 => tau,
+            (r, _) => r,
+        },
+        Pos::Rel(r) => *r,
+    };
+    let k0 = match pos.iter().position(at_from) {
+        Some(k) => k,
+        None => (0..full.len()).max_by(|&a, &b| key(&pos[a]).total_cmp(&key(&pos[b])))?,
+    };
+    let on_from = at_from(&pos[k0]);
+    let mut rows = vec![(
+        full[k0].branch.clone(),
+        full[k0].start_vertex.filter(|_| on_from),
+    )];
+    for j in 1..=full.len() {
+        let k = (k0 + j) % full.len();
+        // Round to the containing interval again: its own start, unless that is `from`.
+        let p = if j == full.len() && on_from {
+            Pos::Rel(tau)
+        } else {
+            pos[k]
+        };
+        if !inside(&p) {
+            break;
+        }
+        rows.push((full[k].branch.clone(), full[k].start_vertex));
+    }
+    Some(rows)
+}
+
+/// `walk::ray_tree_range` against [`restricted`] of the full tree `full` from `q`, over
+/// ranges chosen from the tree and the scene: between exact boundaries, from a boundary
+/// round to itself (the full circle), and between directions towards scene vertices.
+/// Returns how many ranges were compared.
+pub fn check_tree_ranges(
+    s: &SceneRef<'_>,
+    c: &Complex,
+    q: QueryPoint,
+    depth: usize,
+    full: &[TreeInterval],
+) -> Result<usize, String> {
+    let exact: Vec<Direction> = full
+        .iter()
+        .filter_map(|i| i.exact_start)
+        .filter_map(|a| {
+            let (x, y) = a.vector();
+            Direction::new(i64::try_from(x).ok()?, i64::try_from(y).ok()?)
+        })
+        .collect();
+    let toward = |k: usize| {
+        let v = s.vertices().get(k % s.vertices().len().max(1))?.to_query();
+        Direction::new(v.x() - q.x(), v.y() - q.y())
+    };
+    let mut ranges = Vec::new();
+    for k in 0..exact.len().min(3) {
+        ranges.push((Some(exact[k]), exact.get(k + 2).copied()));
+        ranges.push((Some(exact[k]), Some(exact[k])));
+    }
+    for k in [0, 1, 5] {
+        ranges.push((toward(k), toward(k + 3)));
+        ranges.push((toward(k), toward(k)));
+    }
+    let ranges = ranges.into_iter().filter_map(|(f, t)| Some((f?, t?)));
+    compare_tree_ranges(s, c, q, depth, full, ranges)
+}
+
+/// `walk::ray_tree_range` from `q` against [`restricted`] of the full tree `full` over the
+/// given ranges; the ranges [`restricted`] cannot decide are skipped. Returns how many were
+/// compared.
+pub fn compare_tree_ranges(
+    s: &SceneRef<'_>,
+    c: &Complex,
+    q: QueryPoint,
+    depth: usize,
+    full: &[TreeInterval],
+    ranges: impl IntoIterator<Item = (Direction, Direction)>,
+) -> Result<usize, String> {
+    let mut compared = 0;
+    for (from, to) in ranges {
+        let Some(want) = restricted(full, from, to) else {
+            continue;
+        };
+        let at = |e: String| format!("q {q:?} depth {depth} range {from:?}..{to:?}: {e}");
+        let got =
+            vcx::walk::ray_tree_range(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
+        let fa = Angle::constant(from);
+        if !got
+            .first()
+            .and_then(|i| i.exact_start)
+            .is_some_and(|a| a.cmp_exact(&fa).is_eq())
+        {
+            return Err(at("the first interval does not start at `from`".into()));
+        }
+        let got: Vec<RangeRow> = got
+            .into_iter()
+            .map(|i| (i.branch, i.start_vertex))
+            .collect();
+        if got != want {
+            return Err(at(format!(
+                "\n core {got:?}\n restricted full tree {want:?}"
+            )));
+        }
+        compared += 1;
+    }
+    Ok(compared)
 }
 
 /// The JSON scene loader on arbitrary text: an error, or a scene that the oracle accepts,

@@ -452,10 +452,9 @@ fn ray_trees_over_slices_and_loaded_files_are_the_same() {
 #[test]
 fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
     use vcx::geom::predicates::Direction;
-    use vcx::walk::ray_tree_range;
-    let tau = core::f64::consts::TAU;
+    use vcx_tests::generators::compare_tree_ranges;
     let mut rng = ChaCha8Rng::seed_from_u64(33);
-    let (mut compared, mut on_boundary, mut skipped) = (0, 0, 0);
+    let (mut compared, mut on_boundary) = (0, 0);
     for (kind, n, seed) in [
         (SceneKind::Hall, 4, 1),
         (SceneKind::Mixed, 10, 2),
@@ -471,6 +470,7 @@ fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
                     continue;
                 };
                 let exact: Vec<_> = full.iter().filter_map(|i| i.exact_start).collect();
+                let mut ranges = Vec::new();
                 for case in 0..6 {
                     let random = |rng: &mut ChaCha8Rng| loop {
                         let v = (
@@ -501,86 +501,23 @@ fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
                     let (Some(from), Some(to)) = (from, to) else {
                         continue;
                     };
-                    let (fa, ta) = (
-                        vcx::geom::sos::Angle::constant(from),
-                        vcx::geom::sos::Angle::constant(to),
-                    );
-                    let (fr, tr) = (fa.radians(), ta.radians());
-                    let rel_t = if fa.cmp_exact(&ta).is_eq() {
-                        tau
-                    } else {
-                        (tr - fr).rem_euclid(tau)
-                    };
-                    // Position counter-clockwise from `from`, exact where the start is.
-                    let rel = |i: &TreeInterval| -> Option<f64> {
-                        match i.exact_start {
-                            Some(a) if a.cmp_exact(&fa).is_eq() => Some(0.0),
-                            Some(a) if a.cmp_exact(&ta).is_eq() => Some(rel_t),
-                            _ if i.exact_start.is_none()
-                                && (angle_close(i.start, fr) || angle_close(i.start, tr)) =>
-                            {
-                                None
-                            }
-                            _ => Some((i.start - fr).rem_euclid(tau)),
-                        }
-                    };
-                    let rels: Option<Vec<f64>> = full.iter().map(rel).collect();
-                    let Some(rels) = rels else {
-                        skipped += 1;
-                        continue;
-                    };
-                    // The full tree's interval containing `from`, then the ones inside.
-                    let mut want: Vec<(Vec<ObjectId>, Option<usize>)> = Vec::new();
-                    if full.len() == 1 {
-                        want.push((full[0].branch.clone(), None));
-                    } else {
-                        let k0 = (0..full.len())
-                            .max_by(|&a, &b| {
-                                let key = |k: usize| if rels[k] == 0.0 { tau } else { rels[k] };
-                                key(a).total_cmp(&key(b))
-                            })
-                            .unwrap();
-                        if rels[k0] == 0.0 {
-                            on_boundary += 1;
-                        }
-                        let v0 = (rels[k0] == 0.0).then_some(full[k0].start_vertex).flatten();
-                        want.push((full[k0].branch.clone(), v0));
-                        // Around to the containing interval's own start, unless on `from`.
-                        for j in 1..=full.len() {
-                            let k = (k0 + j) % full.len();
-                            let r = if j == full.len() && rels[k] == 0.0 {
-                                tau
-                            } else {
-                                rels[k]
-                            };
-                            if r >= rel_t {
-                                break;
-                            }
-                            want.push((full[k].branch.clone(), full[k].start_vertex));
-                        }
+                    let fa = vcx::geom::sos::Angle::constant(from);
+                    if full.len() > 1
+                        && full
+                            .iter()
+                            .any(|i| i.exact_start.is_some_and(|a| a.cmp_exact(&fa).is_eq()))
+                    {
+                        on_boundary += 1;
                     }
-                    let mut got = ray_tree_range(&c, &s, q, depth, from, to).unwrap();
-                    let first = got
-                        .iter()
-                        .position(|i| i.exact_start.is_some_and(|a| a.cmp_exact(&fa).is_eq()))
-                        .expect("an interval starts at `from`");
-                    got.rotate_left(first);
-                    let got: Vec<_> = got
-                        .iter()
-                        .map(|i| (i.branch.clone(), i.start_vertex))
-                        .collect();
-                    assert_eq!(
-                        got, want,
-                        "q {q:?} depth {depth} from {from:?} to {to:?}\n full {full:?}"
-                    );
-                    compared += 1;
+                    ranges.push((from, to));
                 }
+                let n = compare_tree_ranges(&s, &c, q, depth, &full, ranges)
+                    .unwrap_or_else(|e| panic!("{e}\n full {full:?}"));
+                compared += n;
             }
         }
     }
-    eprintln!(
-        "ranges compared {compared}, starting on a boundary {on_boundary}, skipped {skipped}"
-    );
+    eprintln!("ranges compared {compared}, starting on a boundary {on_boundary}");
     assert!(
         compared > 300 && on_boundary > 20,
         "{compared} {on_boundary}"

@@ -47,6 +47,11 @@
 //! (`|raw| > 2⁵²`, e.g. after refraction by a large η far from the interface) is
 //! [`WalkError::EyeOutOfRange`].
 //!
+//! The cargo features `mirrors`, `refraction` and `screens` compile in the three kinds of
+//! interval resolution above; without one, a tree that meets such an object (a mirror or
+//! refractive object with depth to spare, or any screen) is
+//! [`WalkError::RayTypeDisabled`], never a tree that silently stops there.
+//!
 //! **The tangent law against Snell's law.** The tangent law `tan θ₂ = tan θ₁ / η` keeps
 //! refraction a change of eye (every refracted ray passes through one virtual point), but
 //! it bends less than Snell's `sin θ₂ = sin θ₁ / η` near grazing incidence and has no
@@ -161,6 +166,32 @@ pub enum WalkError {
     /// [`Complex::region`]) and the viewpoint lies outside it: the cylinders its view
     /// needs may be missing.
     OutsideRegion(crate::partition::Region),
+    /// A ray tree needs a ray type whose code this build of `vcx` leaves out: `object`
+    /// (with its `material`) is a mirror or refractive object met with depth to spare, or
+    /// a screen, and the cargo feature `mirrors`, `refraction` or `screens` is off
+    /// ([`WalkError::missing_feature`]).
+    RayTypeDisabled {
+        /// The object the ray tree met.
+        object: ObjectId,
+        /// Its material.
+        material: crate::scene::Material,
+    },
+}
+
+impl WalkError {
+    /// The cargo feature of `vcx` that would avoid this error, for
+    /// [`WalkError::RayTypeDisabled`].
+    pub fn missing_feature(&self) -> Option<&'static str> {
+        match self {
+            WalkError::RayTypeDisabled { material, .. } => match material {
+                crate::scene::Material::Mirror => Some("mirrors"),
+                crate::scene::Material::Refractive { .. } => Some("refraction"),
+                crate::scene::Material::Screen => Some("screens"),
+                crate::scene::Material::Opaque => None,
+            },
+            _ => None,
+        }
+    }
 }
 
 impl core::fmt::Display for WalkError {
@@ -189,6 +220,14 @@ impl core::fmt::Display for WalkError {
                     "viewpoint outside the region {x0},{y0},{x1},{y1} the complex was pruned to"
                 )
             }
+            WalkError::RayTypeDisabled { object, material } => write!(
+                f,
+                "the ray tree meets {} object {}, but vcx was built without the cargo feature \
+                 `{}` (enable it to follow rays past it)",
+                material.name(),
+                object.0,
+                self.missing_feature().unwrap_or("?")
+            ),
         }
     }
 }

@@ -32,6 +32,7 @@
 
 use crate::geom::point::QUERY_MAX_ABS_RAW;
 use crate::geom::{Point, QueryPoint};
+#[cfg(feature = "refraction")]
 use crate::scene::Eta;
 
 /// `round(a + td/N + kn·g/(kd·N))` for one coordinate (see the module documentation).
@@ -87,12 +88,14 @@ pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Opt
 }
 
 /// The reflection of `e` across the line `ab`, rounded to the query grid.
+#[cfg(feature = "mirrors")]
 pub fn reflect(e: QueryPoint, a: Point, b: Point) -> Option<QueryPoint> {
     transform_eye(e, a, b, -1, 1)
 }
 
 /// The tangent-law eye at the interface `ab`: entering (`F + η(E − F)`) or leaving
 /// (`F + (E − F)/η`) an object of index `eta`, rounded to the query grid.
+#[cfg(feature = "refraction")]
 pub fn refract(e: QueryPoint, a: Point, b: Point, eta: Eta, entering: bool) -> Option<QueryPoint> {
     let (raw, one) = (i64::from(eta.raw()), 1i64 << Eta::FRAC_BITS);
     if entering {

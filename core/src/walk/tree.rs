@@ -23,14 +23,23 @@ use alloc::rc::Rc;
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
-use super::{optics, Anchor, Position, WalkError};
+use super::WalkError;
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::wide::{mod_p, residue_i128, Wide};
 use crate::geom::{Point, QueryPoint, Sign};
-use crate::line_space::{ranked, Bound, Chain};
-use crate::partition::{Complex, Cylinder, CylinderId, Layer, Side, Storage, Wall};
+use crate::partition::{Complex, Storage};
 use crate::scene::{Material, ObjectId, SceneRef};
+// Anchored walks (behind screens, mirrors and refractive objects).
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+use {
+    super::{Anchor, Position},
+    crate::line_space::{ranked, Bound, Chain},
+    crate::partition::{Cylinder, CylinderId, Layer, Side, Wall},
+};
+// Changes of eye (mirrors and refractive objects).
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+use super::optics;
 
 /// One interval of a ray-tree sweep: primary directions from `start` counter-clockwise to
 /// the next interval's start, over which the branch is constant.
@@ -62,6 +71,10 @@ struct Dir {
     /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`). `None` past `Wide`'s
     /// budget. Shared, not copied: a `Wide` pair is 272 bytes, and range ends are moved
     /// around a lot.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
+        allow(dead_code)
+    )]
     exact: Option<Rc<(Wide, Wide)>>,
 }
 
@@ -73,7 +86,11 @@ impl Dir {
             exact: None,
         }
     }
+}
 
+/// Range ends against exact directions, for anchored walks and splits.
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+impl Dir {
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly.
     fn turn(&self, v: (i128, i128)) -> Sign {
@@ -189,8 +206,10 @@ pub fn ray_tree<S: Storage>(
 /// [`crate::walk::view_range`] restricts a view: the interval containing `from` starts at
 /// `from` — its `start_vertex` is `None` unless a boundary of the full tree lies exactly on
 /// `from` — and the others are the full tree's intervals whose start lies strictly inside
-/// the range; a boundary exactly on `to` is left out. Sorted by start angle like
-/// [`ray_tree`] (so a range through θ = 0 wraps), which is what [`crate::render`] takes.
+/// the range; a boundary exactly on `to` is left out. In counter-clockwise order from
+/// `from`, like `view_range` (sorting by `f64` start angles could not place an interval
+/// that starts within rounding of `from` at the far end of a full circle);
+/// [`crate::render::angle_order`] rotates them into the start-angle order the renderer takes.
 ///
 /// Only the primary pieces inside the range are followed through mirrors, refractive
 /// objects and screens, so the secondary work is that of the field of view; the primary
@@ -271,7 +290,6 @@ fn sweep<S: Storage>(
         });
         prev = Some(&leaf.branch);
     }
-    out.sort_by(|a, b| a.start.total_cmp(&b.start));
     Ok(out)
 }
 
@@ -372,16 +390,6 @@ impl<S: Storage> Tree<'_, '_, S> {
         (context, out)
     }
 
-    /// Whether a vertex of `object` lies exactly on the line through `eye` with the
-    /// direction of `a`. Bit budget: |a| ≤ 2⁶³, |v − eye| ≤ 2⁵⁴: products < 2¹¹⁸.
-    fn vertex_on_line(&self, eye: QueryPoint, a: &Angle, object: ObjectId) -> bool {
-        let d = a.vector();
-        self.scene.object(object).is_some_and(|o| {
-            (o.first_vertex()..o.first_vertex() + o.len())
-                .any(|v| cross(d, diff(self.qpoint(v), eye)) == 0)
-        })
-    }
-
     /// Whether a vertex that can make a primary-level boundary lies exactly on the ray from
     /// `q` at `f`: one of `ceiling` (mirror and refraction splits), or any vertex if
     /// `ceiling` is a screen (events of the walk behind it).
@@ -416,6 +424,7 @@ fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
 }
 
 /// Whether `a` lies exactly at θ = 0 but the perturbation puts it just below 2π.
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 fn wraps(a: &Angle) -> bool {
     a.cmp_exact(&Angle::ZERO) == Ordering::Equal
         && a.cmp_angle(&Angle::constant(Direction { x: 1, y: -1 })) == Ordering::Greater
@@ -439,10 +448,6 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     fn qpoint(&self, i: usize) -> QueryPoint {
         self.point(i).to_query()
-    }
-
-    fn toward(&self, eye: QueryPoint, v: usize) -> Dir {
-        Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v, true)
     }
 
     /// The primary pieces from a full walk, or the object seen all around if the view has
@@ -523,23 +528,6 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
     }
 
-    /// The boundary where the hit (or exit) edge changes at vertex `v` seen from `eye`.
-    fn split_boundary(&self, eye: QueryPoint, v: usize) -> Boundary {
-        let d = self.toward(eye, v);
-        let dir = d.angle.vector();
-        Boundary {
-            radians: self.map_back(eye, dir),
-            exact: self.hops.is_empty().then_some(d.angle),
-            rule: Rule {
-                hops: self.hops.clone(),
-                eye,
-                dir,
-                level: self.branch.len(),
-                fallback: Some(v),
-            },
-        }
-    }
-
     /// The primary angle (radians, `f64`) of the direction `dir` from `eye` at the current
     /// level: intersect with each hop's edge line and continue from the previous eye.
     fn map_back(&self, eye: QueryPoint, dir: (i128, i128)) -> f64 {
@@ -585,98 +573,210 @@ impl<S: Storage> Tree<'_, '_, S> {
         d
     }
 
-    /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it
-    /// points at an endpoint of the hop's edge (or the hit point falls on or beyond one),
-    /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
-    /// only places the range end; the angular error is about 2⁻⁵² rad).
-    fn map_end(&self, end: &Dir, hop: &Hop) -> Result<Dir, WalkError> {
-        if let Some((v, _)) = end.vertex {
-            if v == hop.a || v == hop.b {
-                return Ok(self.toward(hop.next, v));
+    /// Resolves the piece `p` seen from `eye` by its ceiling's material into leaves.
+    // Without any ray type past the primary view, the eye is not needed.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
+        allow(unused_variables)
+    )]
+    fn piece(
+        &mut self,
+        eye: QueryPoint,
+        depth: usize,
+        p: Piece,
+        out: &mut Vec<Leaf>,
+    ) -> Result<(), WalkError> {
+        let Some(c) = p.ceiling else {
+            out.push(Leaf {
+                branch: self.branch.clone(),
+                boundary: p.boundary,
+            });
+            return Ok(());
+        };
+        let material = self.scene.object(c).ok_or(WalkError::Corrupt)?.material;
+        match material {
+            #[cfg(feature = "screens")]
+            Material::Screen => {
+                for sp in self.floor_pieces(eye, c, &p.from, &p.to, p.boundary)? {
+                    self.piece(eye, depth, sp, out)?;
+                }
+                Ok(())
+            }
+            #[cfg(feature = "mirrors")]
+            Material::Mirror if depth > 0 => self.mirror(eye, c, &p, depth, out),
+            #[cfg(feature = "refraction")]
+            Material::Refractive { eta } if depth > 0 => {
+                self.refractive(eye, c, eta, &p, depth, out)
+            }
+            // The ray type's code is compiled out (cargo features): an error, never a tree
+            // that silently stops at the object.
+            _ if continues(material, depth) => Err(WalkError::RayTypeDisabled {
+                object: c,
+                material,
+            }),
+            _ => {
+                let mut branch = self.branch.clone();
+                branch.push(c);
+                out.push(Leaf {
+                    branch,
+                    boundary: p.boundary,
+                });
+                Ok(())
             }
         }
-        let d = end.angle.vector();
-        let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
-        let e = diff(b, a);
-        let den = cross(d, e);
-        if den == 0 {
-            return Err(WalkError::Corrupt);
-        }
-        let u = cross(d, diff(hop.prev, a)) as f64 / den as f64;
-        // At or beyond an end of the edge (by rounding): that endpoint, exactly.
-        if u <= 0.0 || u >= 1.0 {
-            return Ok(self.toward(hop.next, if u <= 0.0 { hop.a } else { hop.b }));
-        }
-        // `P − next = (prev − next) + t·d` with `t = cross(a − prev, e) / den` (see
-        // `map_dir`) in `f64`, scaled so that its larger component is about 2⁵²: the
-        // direction keeps `f64` precision instead of the query grid's, so that a range far
-        // thinner than a grid step at the edge keeps its two ends apart.
-        let t = cross(diff(a, hop.prev), e) as f64 / den as f64;
-        let pn = diff(hop.prev, hop.next);
-        let (fx, fy) = (pn.0 as f64 + t * d.0 as f64, pn.1 as f64 + t * d.1 as f64);
-        let big = libm::fmax(libm::fabs(fx), libm::fabs(fy));
-        if !big.is_finite() || big == 0.0 {
-            return Err(WalkError::Corrupt);
-        }
-        let (_, exp) = libm::frexp(big);
-        let lim = crate::geom::point::MAX_ABS_DIRECTION as f64;
-        let (vx, vy) = (
-            libm::round(libm::scalbn(fx, 52 - exp)),
-            libm::round(libm::scalbn(fy, 52 - exp)),
-        );
-        if libm::fabs(vx) > lim || libm::fabs(vy) > lim {
-            return Err(WalkError::Corrupt);
-        }
-        let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
-        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`.
-        let exact = (|| {
-            let d = end
-                .exact
-                .as_deref()
-                .copied()
-                .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
-            let den = Wide::cross(&d, e)?;
-            let num = cross(diff(a, hop.prev), e);
-            let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
-            let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
-            match den.sign() {
-                Sign::Negative => Some(Rc::new((x.neg(), y.neg()))),
-                Sign::Zero => None,
-                Sign::Positive => Some(Rc::new((x, y))),
-            }
-        })();
-        Ok(Dir {
-            angle: Angle::constant(dir),
-            vertex: None,
-            exact,
-        })
     }
 
-    /// The range `(lo, hi)` (exact, less than π wide: it lies on one edge) seen through
-    /// `hop`, reversed if `flip` (mirrors). Mapped ends are placed to `f64` precision, so a
-    /// range thinner than that can come out with both ends on one direction or crossed:
-    /// it is then collapsed onto one direction, the end that points at a vertex if only
-    /// one does (`split` and `floor_pieces` take a collapsed range as the ray just before
-    /// that direction).
-    fn map_range(
-        &self,
-        lo: &Dir,
-        hi: &Dir,
-        hop: &Hop,
-        flip: bool,
-    ) -> Result<(Dir, Dir), WalkError> {
-        let (a, b) = (self.map_end(lo, hop)?, self.map_end(hi, hop)?);
-        let (a, b) = if flip { (b, a) } else { (a, b) };
-        let thin = cross(lo.angle.vector(), hi.angle.vector()) == 0;
-        if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
-            let keep = if a.vertex.is_some() && b.vertex.is_none() {
-                a
-            } else {
-                b
-            };
-            return Ok((keep.clone(), keep));
+    /// Merges neighbouring leaves with equal branches and resolves the boundary vertices.
+    fn assemble(&self, leaves: &[Leaf]) -> Vec<TreeInterval> {
+        let m = leaves.len();
+        let starts: Vec<usize> = (0..m)
+            .filter(|&i| leaves[(i + m - 1) % m].branch != leaves[i].branch)
+            .collect();
+        if starts.is_empty() {
+            return alloc::vec![TreeInterval {
+                start: 0.0,
+                exact_start: None,
+                branch: leaves.first().map(|l| l.branch.clone()).unwrap_or_default(),
+                start_vertex: None,
+            }];
         }
-        Ok((a, b))
+        let mut out: Vec<TreeInterval> = starts
+            .iter()
+            .map(|&i| {
+                let (left, right) = (&leaves[(i + m - 1) % m], &leaves[i]);
+                TreeInterval {
+                    start: right.boundary.radians,
+                    exact_start: right.boundary.exact,
+                    branch: right.branch.clone(),
+                    start_vertex: self.resolve(&right.boundary.rule, &left.branch, &right.branch),
+                }
+            })
+            .collect();
+        out.sort_by(|a, b| a.start.total_cmp(&b.start));
+        out
+    }
+
+    fn resolve(&self, rule: &Rule, left: &[ObjectId], right: &[ObjectId]) -> Option<usize> {
+        let stages = rule.hops.len();
+        // The boundary direction at every earlier stage, mapped back hop by hop once.
+        let mut mapped: Vec<Option<(Wide, Wide)>> = alloc::vec![None; stages];
+        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
+        for st in (0..stages).rev() {
+            let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
+            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, &d));
+            if let Some(slot) = mapped.get_mut(st) {
+                *slot = d;
+            }
+        }
+        for st in 0..=stages {
+            let (eye, level, origin) = match st.checked_sub(1).and_then(|i| rule.hops.get(i)) {
+                None => (rule.hops.first().map_or(rule.eye, |h| h.prev), 0, None),
+                Some(h) => (h.next, h.level, Some((h.a, h.b))),
+            };
+            let level = if st == stages { rule.level } else { level };
+            let owners = [left.get(level), right.get(level)];
+            // The vertices of the objects this stage hits on either side, beyond the
+            // stage's origin edge (a ray leaving a mirror or refractive edge).
+            let candidates = owners
+                .iter()
+                .enumerate()
+                .filter(|&(k, id)| id.is_some() && !(k == 1 && owners[0] == *id))
+                .filter_map(|(_, id)| self.scene.object(*(*id)?))
+                .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
+                .filter(|&v| {
+                    origin.is_none_or(|(ia, ib)| {
+                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
+                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
+                        sw != Sign::Zero && sw != se
+                    })
+                });
+            let hops = rule.hops.get(st..).unwrap_or(&[]);
+            let best = match mapped.get(st).and_then(Option::as_ref) {
+                // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
+                _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
+                    let w = diff(self.qpoint(v), eye);
+                    (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
+                }),
+                Some(d) => {
+                    let (r0, r1) = (d.0.residue(), d.1.residue());
+                    nearest_on_ray(candidates, |v| {
+                        let w = diff(self.qpoint(v), eye);
+                        // Different residues modulo 2⁶¹ − 1 prove `cross(d, w) ≠ 0`
+                        // exactly, without the 1024-bit products.
+                        let m =
+                            |a: u64, b: i128| mod_p(u128::from(a) * u128::from(residue_i128(b)));
+                        if m(r0, w.1) != m(r1, w.0) {
+                            return None;
+                        }
+                        (Wide::cross(d, w)?.sign() == Sign::Zero)
+                            .then(|| Wide::dot(d, w))
+                            .flatten()
+                    })
+                }
+                None => {
+                    // Past the exact budget (more hops than `Wide` holds): `f64`.
+                    let d = self.map_dir(hops, rule.eye, rule.dir);
+                    nearest_on_ray(candidates, |v| {
+                        let w = diff(self.qpoint(v), eye);
+                        let wf = (w.0 as f64, w.1 as f64);
+                        let c = d.0 * wf.1 - d.1 * wf.0;
+                        let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
+                        (libm::fabs(c) <= 1e-12 * scale).then_some(d.0 * wf.0 + d.1 * wf.1)
+                    })
+                }
+            };
+            if best.is_some() {
+                return best;
+            }
+        }
+        rule.fallback
+    }
+
+    /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `cur` (the eye after
+    /// `hop`) mapped back to a direction from `hop.prev`, scaled by the hit's denominator;
+    /// `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one of
+    /// at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a 54-bit
+    /// direction fit and the final cross with a query difference too.
+    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
+        let a = self.qpoint(hop.a);
+        let e = diff(self.qpoint(hop.b), a);
+        let den = Wide::cross(d, e)?;
+        Some(match den.sign() {
+            // Along the edge's line: its midpoint, as `map_dir`.
+            Sign::Zero => {
+                let ap = diff(a, hop.prev);
+                (
+                    Wide::from_i128(2 * ap.0 + e.0),
+                    Wide::from_i128(2 * ap.1 + e.1),
+                )
+            }
+            // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
+            s => {
+                let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
+                let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
+                let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
+                if s == Sign::Negative {
+                    (x.neg(), y.neg())
+                } else {
+                    (x, y)
+                }
+            }
+        })
+    }
+}
+
+/// Anchored walks: the pieces of a range seen from an eye in the layer whose floor is an
+/// object (behind a screen, a mirror or a refractive object).
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+impl<S: Storage> Tree<'_, '_, S> {
+    /// Whether a vertex of `object` lies exactly on the line through `eye` with the
+    /// direction of `a`. Bit budget: |a| ≤ 2⁶³, |v − eye| ≤ 2⁵⁴: products < 2¹¹⁸.
+    fn vertex_on_line(&self, eye: QueryPoint, a: &Angle, object: ObjectId) -> bool {
+        let d = a.vector();
+        self.scene.object(object).is_some_and(|o| {
+            (o.first_vertex()..o.first_vertex() + o.len())
+                .any(|v| cross(d, diff(self.qpoint(v), eye)) == 0)
+        })
     }
 
     /// Side of the line through `v` against the line through `eye`, both of direction `d`
@@ -949,6 +1049,126 @@ impl<S: Storage> Tree<'_, '_, S> {
         });
         Ok(pieces)
     }
+}
+
+/// Changes of eye: splitting a range by the edges of a mirror or refractive object, the
+/// virtual eyes and the ranges seen from them.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+impl<S: Storage> Tree<'_, '_, S> {
+    fn toward(&self, eye: QueryPoint, v: usize) -> Dir {
+        Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v, true)
+    }
+
+    /// The boundary where the hit (or exit) edge changes at vertex `v` seen from `eye`.
+    fn split_boundary(&self, eye: QueryPoint, v: usize) -> Boundary {
+        let d = self.toward(eye, v);
+        let dir = d.angle.vector();
+        Boundary {
+            radians: self.map_back(eye, dir),
+            exact: self.hops.is_empty().then_some(d.angle),
+            rule: Rule {
+                hops: self.hops.clone(),
+                eye,
+                dir,
+                level: self.branch.len(),
+                fallback: Some(v),
+            },
+        }
+    }
+
+    /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it
+    /// points at an endpoint of the hop's edge (or the hit point falls on or beyond one),
+    /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
+    /// only places the range end; the angular error is about 2⁻⁵² rad).
+    fn map_end(&self, end: &Dir, hop: &Hop) -> Result<Dir, WalkError> {
+        if let Some((v, _)) = end.vertex {
+            if v == hop.a || v == hop.b {
+                return Ok(self.toward(hop.next, v));
+            }
+        }
+        let d = end.angle.vector();
+        let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
+        let e = diff(b, a);
+        let den = cross(d, e);
+        if den == 0 {
+            return Err(WalkError::Corrupt);
+        }
+        let u = cross(d, diff(hop.prev, a)) as f64 / den as f64;
+        // At or beyond an end of the edge (by rounding): that endpoint, exactly.
+        if u <= 0.0 || u >= 1.0 {
+            return Ok(self.toward(hop.next, if u <= 0.0 { hop.a } else { hop.b }));
+        }
+        // `P − next = (prev − next) + t·d` with `t = cross(a − prev, e) / den` (see
+        // `map_dir`) in `f64`, scaled so that its larger component is about 2⁵²: the
+        // direction keeps `f64` precision instead of the query grid's, so that a range far
+        // thinner than a grid step at the edge keeps its two ends apart.
+        let t = cross(diff(a, hop.prev), e) as f64 / den as f64;
+        let pn = diff(hop.prev, hop.next);
+        let (fx, fy) = (pn.0 as f64 + t * d.0 as f64, pn.1 as f64 + t * d.1 as f64);
+        let big = libm::fmax(libm::fabs(fx), libm::fabs(fy));
+        if !big.is_finite() || big == 0.0 {
+            return Err(WalkError::Corrupt);
+        }
+        let (_, exp) = libm::frexp(big);
+        let lim = crate::geom::point::MAX_ABS_DIRECTION as f64;
+        let (vx, vy) = (
+            libm::round(libm::scalbn(fx, 52 - exp)),
+            libm::round(libm::scalbn(fy, 52 - exp)),
+        );
+        if libm::fabs(vx) > lim || libm::fabs(vy) > lim {
+            return Err(WalkError::Corrupt);
+        }
+        let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
+        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`.
+        let exact = (|| {
+            let d = end
+                .exact
+                .as_deref()
+                .copied()
+                .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
+            let den = Wide::cross(&d, e)?;
+            let num = cross(diff(a, hop.prev), e);
+            let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
+            let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
+            match den.sign() {
+                Sign::Negative => Some(Rc::new((x.neg(), y.neg()))),
+                Sign::Zero => None,
+                Sign::Positive => Some(Rc::new((x, y))),
+            }
+        })();
+        Ok(Dir {
+            angle: Angle::constant(dir),
+            vertex: None,
+            exact,
+        })
+    }
+
+    /// The range `(lo, hi)` (exact, less than π wide: it lies on one edge) seen through
+    /// `hop`, reversed if `flip` (mirrors). Mapped ends are placed to `f64` precision, so a
+    /// range thinner than that can come out with both ends on one direction or crossed:
+    /// it is then collapsed onto one direction, the end that points at a vertex if only
+    /// one does (`split` and `floor_pieces` take a collapsed range as the ray just before
+    /// that direction).
+    fn map_range(
+        &self,
+        lo: &Dir,
+        hi: &Dir,
+        hop: &Hop,
+        flip: bool,
+    ) -> Result<(Dir, Dir), WalkError> {
+        let (a, b) = (self.map_end(lo, hop)?, self.map_end(hi, hop)?);
+        let (a, b) = if flip { (b, a) } else { (a, b) };
+        let thin = cross(lo.angle.vector(), hi.angle.vector()) == 0;
+        if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
+            let keep = if a.vertex.is_some() && b.vertex.is_none() {
+                a
+            } else {
+                b
+            };
+            return Ok((keep.clone(), keep));
+        }
+        Ok((a, b))
+    }
 
     /// Splits the range `(lo, hi)` seen from `eye` on `m` by the edges of `m` facing the eye
     /// (`front`) or facing away (`!front`, the exit edges of a ray inside `m`): the pieces
@@ -1044,44 +1264,6 @@ impl<S: Storage> Tree<'_, '_, S> {
             .collect()
     }
 
-    fn piece(
-        &mut self,
-        eye: QueryPoint,
-        depth: usize,
-        p: Piece,
-        out: &mut Vec<Leaf>,
-    ) -> Result<(), WalkError> {
-        let Some(c) = p.ceiling else {
-            out.push(Leaf {
-                branch: self.branch.clone(),
-                boundary: p.boundary,
-            });
-            return Ok(());
-        };
-        let material = self.scene.object(c).ok_or(WalkError::Corrupt)?.material;
-        match material {
-            Material::Screen => {
-                for sp in self.floor_pieces(eye, c, &p.from, &p.to, p.boundary)? {
-                    self.piece(eye, depth, sp, out)?;
-                }
-                Ok(())
-            }
-            Material::Mirror if depth > 0 => self.mirror(eye, c, &p, depth, out),
-            Material::Refractive { eta } if depth > 0 => {
-                self.refractive(eye, c, eta, &p, depth, out)
-            }
-            _ => {
-                let mut branch = self.branch.clone();
-                branch.push(c);
-                out.push(Leaf {
-                    branch,
-                    boundary: p.boundary,
-                });
-                Ok(())
-            }
-        }
-    }
-
     /// Walks the pieces of `(from, to)` seen from `eye` anchored to `m`, one level deeper.
     #[allow(clippy::too_many_arguments)]
     fn deeper(
@@ -1106,6 +1288,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         r
     }
 
+    #[cfg(feature = "mirrors")]
     fn mirror(
         &mut self,
         eye: QueryPoint,
@@ -1155,6 +1338,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         Ok(())
     }
 
+    #[cfg(feature = "refraction")]
     fn refractive(
         &mut self,
         eye: QueryPoint,
@@ -1192,6 +1376,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         Ok(())
     }
 
+    #[cfg(feature = "refraction")]
     #[allow(clippy::too_many_arguments)]
     fn exits(
         &mut self,
@@ -1228,143 +1413,15 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
         Ok(())
     }
+}
 
-    /// Merges neighbouring leaves with equal branches and resolves the boundary vertices.
-    fn assemble(&self, leaves: &[Leaf]) -> Vec<TreeInterval> {
-        let m = leaves.len();
-        let starts: Vec<usize> = (0..m)
-            .filter(|&i| leaves[(i + m - 1) % m].branch != leaves[i].branch)
-            .collect();
-        if starts.is_empty() {
-            return alloc::vec![TreeInterval {
-                start: 0.0,
-                exact_start: None,
-                branch: leaves.first().map(|l| l.branch.clone()).unwrap_or_default(),
-                start_vertex: None,
-            }];
-        }
-        let mut out: Vec<TreeInterval> = starts
-            .iter()
-            .map(|&i| {
-                let (left, right) = (&leaves[(i + m - 1) % m], &leaves[i]);
-                TreeInterval {
-                    start: right.boundary.radians,
-                    exact_start: right.boundary.exact,
-                    branch: right.branch.clone(),
-                    start_vertex: self.resolve(&right.boundary.rule, &left.branch, &right.branch),
-                }
-            })
-            .collect();
-        out.sort_by(|a, b| a.start.total_cmp(&b.start));
-        out
-    }
-
-    fn resolve(&self, rule: &Rule, left: &[ObjectId], right: &[ObjectId]) -> Option<usize> {
-        let stages = rule.hops.len();
-        // The boundary direction at every earlier stage, mapped back hop by hop once.
-        let mut mapped: Vec<Option<(Wide, Wide)>> = alloc::vec![None; stages];
-        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
-        for st in (0..stages).rev() {
-            let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
-            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, &d));
-            if let Some(slot) = mapped.get_mut(st) {
-                *slot = d;
-            }
-        }
-        for st in 0..=stages {
-            let (eye, level, origin) = match st.checked_sub(1).and_then(|i| rule.hops.get(i)) {
-                None => (rule.hops.first().map_or(rule.eye, |h| h.prev), 0, None),
-                Some(h) => (h.next, h.level, Some((h.a, h.b))),
-            };
-            let level = if st == stages { rule.level } else { level };
-            let owners = [left.get(level), right.get(level)];
-            // The vertices of the objects this stage hits on either side, beyond the
-            // stage's origin edge (a ray leaving a mirror or refractive edge).
-            let candidates = owners
-                .iter()
-                .enumerate()
-                .filter(|&(k, id)| id.is_some() && !(k == 1 && owners[0] == *id))
-                .filter_map(|(_, id)| self.scene.object(*(*id)?))
-                .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
-                .filter(|&v| {
-                    origin.is_none_or(|(ia, ib)| {
-                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
-                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
-                        sw != Sign::Zero && sw != se
-                    })
-                });
-            let hops = rule.hops.get(st..).unwrap_or(&[]);
-            let best = match mapped.get(st).and_then(Option::as_ref) {
-                // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
-                _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
-                    let w = diff(self.qpoint(v), eye);
-                    (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
-                }),
-                Some(d) => {
-                    let (r0, r1) = (d.0.residue(), d.1.residue());
-                    nearest_on_ray(candidates, |v| {
-                        let w = diff(self.qpoint(v), eye);
-                        // Different residues modulo 2⁶¹ − 1 prove `cross(d, w) ≠ 0`
-                        // exactly, without the 1024-bit products.
-                        let m =
-                            |a: u64, b: i128| mod_p(u128::from(a) * u128::from(residue_i128(b)));
-                        if m(r0, w.1) != m(r1, w.0) {
-                            return None;
-                        }
-                        (Wide::cross(d, w)?.sign() == Sign::Zero)
-                            .then(|| Wide::dot(d, w))
-                            .flatten()
-                    })
-                }
-                None => {
-                    // Past the exact budget (more hops than `Wide` holds): `f64`.
-                    let d = self.map_dir(hops, rule.eye, rule.dir);
-                    nearest_on_ray(candidates, |v| {
-                        let w = diff(self.qpoint(v), eye);
-                        let wf = (w.0 as f64, w.1 as f64);
-                        let c = d.0 * wf.1 - d.1 * wf.0;
-                        let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
-                        (libm::fabs(c) <= 1e-12 * scale).then_some(d.0 * wf.0 + d.1 * wf.1)
-                    })
-                }
-            };
-            if best.is_some() {
-                return best;
-            }
-        }
-        rule.fallback
-    }
-
-    /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `cur` (the eye after
-    /// `hop`) mapped back to a direction from `hop.prev`, scaled by the hit's denominator;
-    /// `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one of
-    /// at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a 54-bit
-    /// direction fit and the final cross with a query difference too.
-    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
-        let a = self.qpoint(hop.a);
-        let e = diff(self.qpoint(hop.b), a);
-        let den = Wide::cross(d, e)?;
-        Some(match den.sign() {
-            // Along the edge's line: its midpoint, as `map_dir`.
-            Sign::Zero => {
-                let ap = diff(a, hop.prev);
-                (
-                    Wide::from_i128(2 * ap.0 + e.0),
-                    Wide::from_i128(2 * ap.1 + e.1),
-                )
-            }
-            // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
-            s => {
-                let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
-                let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
-                let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
-                if s == Sign::Negative {
-                    (x.neg(), y.neg())
-                } else {
-                    (x, y)
-                }
-            }
-        })
+/// Whether a ray tree looks past an object of `material` with `depth` levels left: always
+/// through a screen, into a mirror or refractive object while depth remains.
+fn continues(material: Material, depth: usize) -> bool {
+    match material {
+        Material::Screen => true,
+        Material::Mirror | Material::Refractive { .. } => depth > 0,
+        Material::Opaque => false,
     }
 }
 
@@ -1382,4 +1439,116 @@ fn nearest_on_ray<K: PartialOrd + Default>(
         }
     }
     best.map(|(_, v)| v)
+}
+
+#[cfg(test)]
+mod tests {
+    use alloc::format;
+    use alloc::vec::Vec;
+
+    use super::ray_tree;
+    use crate::geom::{Point, QueryPoint};
+    use crate::partition::build_by_sweep;
+    use crate::scene::{Eta, Material, ObjectId, Scene};
+    use crate::walk::{view, WalkError};
+
+    fn rect(x0: i32, y0: i32, x1: i32, y1: i32) -> Vec<Point> {
+        let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
+        alloc::vec![p(x0, y0), p(x1, y0), p(x1, y1), p(x0, y1)]
+    }
+
+    /// Opaque boxes left of and below the eye `(0.5, 0.25)`, and object 1 of `material`
+    /// right of it, facing the left box.
+    fn scene(material: Material) -> Scene {
+        let objects = [
+            (Material::Opaque, rect(-6, -2, -4, 1)),
+            (material, rect(4, -1, 6, 2)),
+            (Material::Opaque, rect(-3, -7, 3, -5)),
+        ];
+        Scene::new(objects.iter().map(|(m, p)| (*m, p.as_slice()))).unwrap()
+    }
+
+    fn eye() -> QueryPoint {
+        QueryPoint::from_f64(0.5, 0.25).unwrap()
+    }
+
+    /// Whether this build follows rays past objects of `material` (its cargo feature).
+    fn compiled(material: Material) -> bool {
+        match material {
+            Material::Mirror => cfg!(feature = "mirrors"),
+            Material::Refractive { .. } => cfg!(feature = "refraction"),
+            Material::Screen => cfg!(feature = "screens"),
+            Material::Opaque => true,
+        }
+    }
+
+    /// A ray tree that meets a ray type compiled out is `RayTypeDisabled` naming the object
+    /// and the feature; with the feature on it is a tree (through the mirror: the left box
+    /// reflected). Runs in every feature combination (`.ci/run` runs it with none).
+    #[test]
+    fn ray_types_follow_the_cargo_features() {
+        let eta = Eta::from_f64(1.5).unwrap();
+        for material in [
+            Material::Mirror,
+            Material::Refractive { eta },
+            Material::Screen,
+        ] {
+            let s = scene(material);
+            let (s, name) = (s.as_ref(), material.name());
+            let c = build_by_sweep(&s).unwrap();
+            match (compiled(material), ray_tree(&c, &s, eye(), 1)) {
+                (false, Err(e)) => {
+                    assert_eq!(
+                        e,
+                        WalkError::RayTypeDisabled {
+                            object: ObjectId(1),
+                            material
+                        }
+                    );
+                    let feature = e.missing_feature().unwrap();
+                    let shown = format!("{e}");
+                    assert!(shown.contains(feature) && shown.contains(name), "{shown}");
+                }
+                (true, Ok(tree)) if material == Material::Mirror => {
+                    let through = [ObjectId(1), ObjectId(0)];
+                    assert!(tree.iter().any(|t| t.branch == through), "{tree:?}");
+                }
+                (true, Ok(_)) => {}
+                (on, r) => panic!("{name}: feature on: {on}, tree {r:?}"),
+            }
+        }
+    }
+
+    /// Depth 0 needs no ray type but screens: the tree is the view in every build.
+    #[test]
+    fn depth_zero_tree_is_the_view_without_ray_features() {
+        let eta = Eta::from_f64(1.5).unwrap();
+        for material in [Material::Mirror, Material::Refractive { eta }] {
+            let s = scene(material);
+            let s = s.as_ref();
+            let c = build_by_sweep(&s).unwrap();
+            let (tree, v) = (ray_tree(&c, &s, eye(), 0), view(&c, &s, eye()));
+            let (tree, v) = (tree.unwrap(), v.unwrap());
+            assert_eq!(tree.len(), v.len());
+            for (t, v) in tree.iter().zip(&v) {
+                assert_eq!(t.branch.first().copied(), v.object);
+                assert_eq!(t.branch.len(), usize::from(v.object.is_some()));
+                assert_eq!(t.start_vertex, v.start_vertex);
+            }
+        }
+    }
+
+    /// `render::hit_along` follows a branch through a mirror only with `mirrors`: the ray
+    /// right from the eye meets the mirror at x = 4 (3.5 away) and the left box at x = −4
+    /// (8 more).
+    #[test]
+    fn hit_along_follows_the_cargo_features() {
+        let s = scene(Material::Mirror);
+        let branch = [ObjectId(1), ObjectId(0)];
+        let hit = crate::render::hit_along(&s.as_ref(), eye(), (1.0, 0.0), &branch);
+        assert_eq!(hit.is_some(), cfg!(feature = "mirrors"), "{hit:?}");
+        if let Some(h) = hit {
+            assert!(libm::fabs(h.first - 3.5) < 1e-9 && libm::fabs(h.length - 11.5) < 1e-9);
+        }
+    }
 }

@@ -34,7 +34,7 @@ use std::time::Instant;
 
 use serde_json::{json, Value};
 use vcx::partition::{build_by_sweep, point_in_scene};
-use vcx::render::{Camera, CoverageTable};
+use vcx::render::{angle_order, Camera, CoverageTable};
 use vcx::walk::ray_tree_range;
 use vcx::{QueryPoint, SceneRef};
 use vcx_baselines::{render, render_columns, BvhCaster, Caster, Prepared, Quadtree};
@@ -413,15 +413,20 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
     for cam in &cameras {
         let (from, to) = cam.range();
         let r = timed(&mut times, a.repeat, || {
-            ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to)
-                .map(|tree| (CoverageTable::exact(cam, &tree), tree.len()))
+            ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut tree| {
+                angle_order(&mut tree);
+                (CoverageTable::exact(cam, &tree), tree.len())
+            })
         });
         // A viewpoint the walk rejects (degenerate rounded optics) is left out.
         if let Ok((table, n)) = r {
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
             if let Ok(tree) = timed(&mut tree_times, a.repeat, || {
-                ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to)
+                ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut t| {
+                    angle_order(&mut t);
+                    t
+                })
             }) {
                 timed(&mut cover_times, a.repeat, || {
                     CoverageTable::exact(cam, &tree)

@@ -138,7 +138,9 @@ pub fn intervals(
             .collect())
     } else {
         let (from, to) = camera.range();
-        Ok(ray_tree_range(complex, scene, q, depth, from, to)?
+        let mut tree = ray_tree_range(complex, scene, q, depth, from, to)?;
+        vcx::render::angle_order(&mut tree);
+        Ok(tree
             .into_iter()
             .map(|t| Seen {
                 exact: t.exact_start,
