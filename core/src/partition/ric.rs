@@ -33,7 +33,8 @@
 //! arc at θ. Each (chain, side, layer) has one `Vec` of entries sorted by left wall
 //! (addressed by a slot number, not a search tree), searched by bisection. Destroyed
 //! cylinders are not removed at once: they are skipped by their alive flag and a list is
-//! compacted when a quarter of it is dead.
+//! compacted when a quarter of it is dead. An insertion's new entries are grouped by list
+//! at commit and each list is updated once (one pass of moves, not one per entry).
 //!
 //! **Angles.** Every vertex keeps a direction key ([`Dir`]): a monotone integer
 //! pseudo-angle, then the exact direction vector. Comparing walls is one `u64` comparison,
@@ -1146,6 +1147,20 @@ impl History {
             }
             s.created.push(id);
         }
+        s.run_id.clear();
+        for k in 0..s.derived.len() {
+            let shape = s.derived[k].0;
+            let id = match s.open.binary_search_by_key(&shape, |e| e.0) {
+                Ok(i) => s.open[i].1,
+                Err(_) => return Err(lost("open at 0")),
+            };
+            s.run_id.push(id);
+        }
+        s.chain_dense.clear();
+        for k in 0..s.chain.len() {
+            let i = s.state_index(s.chain[k]);
+            s.chain_dense.push(i);
+        }
         s.record_children();
         let mut theta: Option<Key> = None;
 
@@ -1421,10 +1436,13 @@ impl History {
     /// Moves the insertion to the chain `s.next` after an event at `wall`.
     fn step(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
         derive(&self.cylinders, &s.next, s.n, &mut s.derived);
+        // The derived intervals by shape (with their index, so each learns its cylinder).
         s.shapes.clear();
-        s.shapes.extend(s.derived.iter().map(|d| d.0));
+        s.shapes
+            .extend(s.derived.iter().enumerate().map(|(k, d)| (d.0, k as u32)));
         s.shapes.sort_unstable();
-        s.shapes.dedup();
+        s.run_id.clear();
+        s.run_id.resize(s.derived.len(), CylinderId::ZERO);
         s.closers.clear();
         s.openers.clear();
         // Replacement intervals that changed: close those gone, open the new ones (both in
@@ -1434,30 +1452,42 @@ impl History {
         open.clear();
         let (mut i, mut j) = (0, 0);
         for _ in 0..old.len() + s.shapes.len() {
-            match (old.get(i), s.shapes.get(j)) {
-                (Some(&(so, id)), Some(&sn)) if so == sn => {
-                    open.push((so, id));
+            let sn = s.shapes.get(j).map(|e| e.0);
+            let id = match (old.get(i), sn) {
+                (Some(&(so, id)), Some(sn)) if so == sn => {
                     i += 1;
-                    j += 1;
+                    id
                 }
                 (Some(&(_, id)), None) => {
                     self.cylinders[id.index()].right = wall;
                     s.closers.push(id);
                     i += 1;
+                    continue;
                 }
-                (Some(&(so, id)), Some(&sn)) if so < sn => {
+                (Some(&(so, id)), Some(sn)) if so < sn => {
                     self.cylinders[id.index()].right = wall;
                     s.closers.push(id);
                     i += 1;
+                    continue;
                 }
-                (_, Some(&sn)) => {
+                (_, Some(sn)) => {
                     let id = self.push(Cylinder::new(sn, wall))?;
-                    open.push((sn, id));
                     s.created.push(id);
                     s.openers.push(id);
-                    j += 1;
+                    id
                 }
                 (None, None) => break,
+            };
+            // Every derived interval of this shape is this cylinder.
+            let Some(sn) = sn else { break };
+            open.push((sn, id));
+            let group = s.shapes.get(j..).unwrap_or(&[]);
+            let group = group.get(..group.iter().take_while(|e| e.0 == sn).count());
+            for &(_, k) in group.unwrap_or(&[]) {
+                if let Some(r) = s.run_id.get_mut(k as usize) {
+                    *r = id;
+                }
+                j += 1;
             }
         }
         s.open = open;
@@ -1470,14 +1500,17 @@ impl History {
                 st.before = stamp;
             }
         }
+        // The dense indices of the next chain, kept for `record_children`.
+        s.next_dense.clear();
         for k in 0..s.next.len() {
-            s.state(s.next[k]).after = stamp;
+            let i = s.state_index(s.next[k]);
+            s.dense[i].after = stamp;
+            s.next_dense.push(i);
         }
         s.diff.clear();
         for k in 0..s.next.len() {
-            let d = s.next[k];
-            if s.state(d).before != stamp {
-                s.diff.push(d);
+            if s.dense[s.next_dense[k]].before != stamp {
+                s.diff.push(s.next[k]);
             }
         }
         s.diff.sort_unstable();
@@ -1509,9 +1542,8 @@ impl History {
         }
         s.diff.clear();
         for k in 0..s.chain.len() {
-            let d = s.chain[k];
-            if s.state(d).after != stamp {
-                s.diff.push(d);
+            if s.dense[s.chain_dense[k]].after != stamp {
+                s.diff.push(s.chain[k]);
             }
         }
         s.diff.sort_unstable();
@@ -1550,6 +1582,7 @@ impl History {
             }
         }
         core::mem::swap(&mut s.chain, &mut s.next);
+        core::mem::swap(&mut s.chain_dense, &mut s.next_dense);
         s.record_children();
         Ok(())
     }
@@ -1716,9 +1749,9 @@ impl History {
     /// Updates the border index at commit. Destroyed cylinders are only counted as dead
     /// in their lists ([`History::across`] skips them by their alive flag); a list is
     /// compacted when a quarter of it is dead, so it stays below 4/3 of its live size.
-    /// Created cylinders are inserted by bisection, after old
-    /// entries with an equal left wall.
-    fn update_borders(&mut self, scene: &SceneRef<'_>, s: &Scratch) {
+    /// Created cylinders are inserted by bisection, after old entries with an equal left
+    /// wall, each list once ([`History::insert_group`]).
+    fn update_borders(&mut self, scene: &SceneRef<'_>, s: &mut Scratch) {
         for st in &s.dense {
             if let Some(c) = self.cylinders.get(st.id.index()) {
                 for sl in border_slots(c).into_iter().flatten() {
@@ -1728,13 +1761,108 @@ impl History {
                 }
             }
         }
+        // The new entries grouped by list (counting sort, creation order kept within a
+        // list), then each list updated once: one pass of moves instead of one per entry.
+        s.pending.clear();
+        s.groups.clear();
+        if s.per_slot.len() < self.borders.len() {
+            s.per_slot.resize(self.borders.len(), 0);
+        }
         for &id in &s.created {
             let Some(c) = self.cylinders.get(id.index()).copied() else {
                 continue;
             };
             for sl in border_slots(&c).into_iter().flatten() {
-                self.insert_border(scene, sl, self.entry(c.left, id));
+                let Some(count) = s.per_slot.get_mut(sl) else {
+                    continue;
+                };
+                if *count == 0 {
+                    s.groups.push((sl, 0, 0));
+                }
+                *count += 1;
+                s.pending.push((sl, self.entry(c.left, id)));
             }
+        }
+        let mut at = 0;
+        for g in &mut s.groups {
+            if let Some(count) = s.per_slot.get_mut(g.0) {
+                *g = (g.0, at, *count);
+                // From here on the next write position in `sorted`.
+                (at, *count) = (at + *count, at);
+            }
+        }
+        s.sorted.clear();
+        s.sorted
+            .resize(s.pending.len(), self.entry(Wall::Zero, CylinderId::ZERO));
+        for &(sl, e) in &s.pending {
+            if let Some(w) = s.per_slot.get_mut(sl) {
+                if let Some(x) = s.sorted.get_mut(*w) {
+                    *x = e;
+                }
+                *w += 1;
+            }
+        }
+        for k in 0..s.groups.len() {
+            let (sl, start, len) = s.groups[k];
+            if let Some(w) = s.per_slot.get_mut(sl) {
+                *w = 0;
+            }
+            if let Some(group) = s.sorted.get_mut(start..start + len) {
+                self.insert_group(scene, sl, group);
+            }
+        }
+    }
+
+    /// Inserts the entries `group` (in creation order) into border list `sl` as
+    /// [`History::insert_border`] would one after the other: the same compaction (only
+    /// the first insertion can compact: `dead` is 0 after it, and without it the list
+    /// only grows), then each entry after every entry with a left wall at or before its
+    /// own — on equal walls old entries first, then creation order.
+    fn insert_group(&mut self, scene: &SceneRef<'_>, sl: usize, group: &mut [Entry]) {
+        let (Some(list), Some(dead)) = (self.borders.get_mut(sl), self.dead.get_mut(sl)) else {
+            return;
+        };
+        let Some(&first) = group.first() else {
+            return;
+        };
+        if *dead as usize * 4 > list.len() {
+            let before = list.len();
+            let alive = &self.alive;
+            list.retain(|x| alive.get(x.id.index()).is_some_and(|&a| a));
+            self.entries = self.entries.saturating_sub(before - list.len());
+            *dead = 0;
+        }
+        let mut list = core::mem::take(list);
+        // Stable insertion sort: groups are short and nearly sorted (creation follows θ).
+        let greater = |a: &Entry, b: &Entry| self.cmp_entries(scene, a, b) == Ordering::Greater;
+        for i in 1..group.len() {
+            for j in (1..=i).rev() {
+                if !greater(&group[j - 1], &group[j]) {
+                    break;
+                }
+                group.swap(j - 1, j);
+            }
+        }
+        // From the last new entry down: its place among the old entries not yet moved,
+        // then those after it move up once, past the new entries still to come.
+        let old = list.len();
+        let k = group.len();
+        list.resize(old + k, first);
+        let mut end = old;
+        for j in (0..k).rev() {
+            let e = group[j];
+            let before = |x: &Entry| !greater(x, &e);
+            let p = match list.get(..end) {
+                Some(l) if l.last().is_some_and(|x| !before(x)) => l.partition_point(before),
+                _ => end,
+            };
+            list.copy_within(p..end, p + j + 1);
+            list[p + j] = e;
+            end = p;
+        }
+        self.entries += k;
+        if let Some(slot) = self.borders.get_mut(sl) {
+            *slot = list;
         }
     }
 
@@ -1752,7 +1880,13 @@ impl History {
         let Some(list) = self.borders.get(sl) else {
             return;
         };
-        let k = list.partition_point(|x| self.cmp_entries(scene, x, &e) != Ordering::Greater);
+        // Entries mostly come in wall order (N's own arcs): try the end before bisecting.
+        let k = match list.last() {
+            Some(x) if self.cmp_entries(scene, x, &e) == Ordering::Greater => {
+                list.partition_point(|x| self.cmp_entries(scene, x, &e) != Ordering::Greater)
+            }
+            _ => list.len(),
+        };
         if let Some(list) = self.borders.get_mut(sl) {
             list.insert(k, e);
             self.entries += 1;
@@ -1821,7 +1955,19 @@ struct Scratch {
     spare_open: Vec<(Shape, CylinderId)>,
     /// The replacement intervals of the chain and the chain indices each covers.
     derived: Vec<(Shape, usize, usize)>,
-    shapes: Vec<Shape>,
+    /// `(shape, index in derived)`, sorted.
+    shapes: Vec<(Shape, u32)>,
+    /// The cylinder of each derived interval.
+    run_id: Vec<CylinderId>,
+    /// `chain_dense` of the chain after the current event.
+    next_dense: Vec<usize>,
+    /// New border-index entries at commit, (list, entry) in creation order, and grouped
+    /// by list: `groups` holds (list, start in `sorted`, count); `per_slot` is all zero
+    /// between commits.
+    pending: Vec<(usize, Entry)>,
+    sorted: Vec<Entry>,
+    groups: Vec<(usize, usize, usize)>,
+    per_slot: Vec<usize>,
     /// Every cylinder created by this insertion.
     created: Vec<CylinderId>,
     closers: Vec<CylinderId>,
@@ -1976,7 +2122,8 @@ impl Scratch {
 
     /// Links every chain cylinder to the replacement intervals covering it now: `I₀` to
     /// the interval below N, `I_k` to the one above, and every `I_j` to the `(F, N)` and
-    /// `(N, G)` runs through `j` (as [`derive`] reports them).
+    /// `(N, G)` runs through `j` (as [`derive`] reports them, their cylinders in
+    /// `run_id`). `chain_dense` must hold the chain's indices in `dense`.
     fn record_children(&mut self) {
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
@@ -1984,20 +2131,17 @@ impl Scratch {
             self.generation = 1;
         }
         let generation = self.generation;
-        self.chain_dense.clear();
-        for k in 0..self.chain.len() {
-            let i = self.state_index(self.chain[k]);
-            let st = &mut self.dense[i];
-            st.pos = k as u32;
-            st.generation = generation;
-            self.chain_dense.push(i);
+        for (k, &i) in self.chain_dense.iter().enumerate() {
+            if let Some(st) = self.dense.get_mut(i) {
+                st.pos = k as u32;
+                st.generation = generation;
+            }
         }
         for r in 0..self.derived.len() {
-            let (sh, lo, hi) = self.derived[r];
-            let Ok(pos) = self.open.binary_search_by_key(&sh, |e| e.0) else {
-                continue;
+            let (_, lo, hi) = self.derived[r];
+            let Some(&id) = self.run_id.get(r) else {
+                break;
             };
-            let id = self.open[pos].1;
             for j in lo..=hi {
                 let Some(st) = self.chain_dense.get(j).and_then(|&i| self.dense.get_mut(i)) else {
                     break;
