@@ -284,7 +284,10 @@ fn construction_continues_identically_after_a_round_trip() {
             for &o in &order[cut..] {
                 h.insert(&s, o).unwrap();
             }
-            assert!(h.to_parts() == want, "{kind:?} n={n}: differs after a cut at {cut}");
+            assert!(
+                h.to_parts() == want,
+                "{kind:?} n={n}: differs after a cut at {cut}"
+            );
             h.validate(&s).unwrap();
         }
     }
