@@ -16,13 +16,14 @@ use vcx_demo::stress::{Family, SCALES};
 const VCX: &str = env!("CARGO_BIN_EXE_vcx");
 
 /// The sections of BENCHMARKS.md, in order (the start of each `## ` heading).
-const SECTIONS: [&str; 13] = [
+const SECTIONS: [&str; 14] = [
     "Targets",
     "Construction",
     "Views",
     "Ray trees",
     "Frames",
     "Device format sizes",
+    "Device format sizes with a region",
     "Run time against error",
     "Numerical stability",
     "Fig. 11",
@@ -34,13 +35,14 @@ const SECTIONS: [&str; 13] = [
 
 /// The plots: the Figs. 9–19, views, ray trees, sizes, run time against error and
 /// stability.
-const PLOTS: [&str; 19] = [
+const PLOTS: [&str; 20] = [
     "fig09_size.svg",
     "fig10_build_time.svg",
     "views_grid.svg",
     "ray_trees_time.svg",
     "ray_trees_intervals.svg",
     "sizes_grid.svg",
+    "regions_grid.svg",
     "fig11_frame_rate.svg",
     "fig12_hall_time.svg",
     "fig13_hall_complexity.svg",

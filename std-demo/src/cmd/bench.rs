@@ -450,7 +450,7 @@ fn random_points(scene: &vcx::SceneRef<'_>, k: usize, seed: u64) -> Vec<QueryPoi
 }
 
 /// `k` random free points of the scene in the closed box `region` (`--region`).
-fn random_points_in(
+pub(crate) fn random_points_in(
     scene: &vcx::SceneRef<'_>,
     region: &vcx::partition::Region,
     k: usize,

@@ -189,6 +189,11 @@ pub(crate) const FIGURES: &[Figure] = &[
         run: sections::sizes,
     },
     Figure {
+        name: "regions",
+        title: "Device format sizes with a region of viewpoints (vcx build --region)",
+        run: sections::regions,
+    },
+    Figure {
         name: "error",
         title: "Run time against error: the complex against the ray casters (hall and mixed, depth 5)",
         run: fig_error,
