@@ -348,19 +348,35 @@ pub(super) fn frames(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             format!("{:.0}", 1.0 / frame.seconds),
             format!("{:.1}", frame.intervals),
         ]);
-        extra.push((frame.seconds - sweep.seconds) * 1e6);
+        extra.push((
+            depth,
+            frame.seconds / sweep.seconds,
+            (frame.seconds - sweep.seconds) * 1e6,
+        ));
         if kind == SceneKind::Hall {
             target = Some(1.0 / frame.seconds);
         }
     }
     const FPS: f64 = 10_000.0;
-    let lo = extra.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = extra.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let trees: Vec<String> = extra
+        .iter()
+        .filter(|e| e.0 > 0)
+        .map(|e| format!("{:.2}×", e.1))
+        .collect();
+    let views: Vec<String> = extra
+        .iter()
+        .filter(|e| e.0 == 0)
+        .map(|e| format!("{:.0} µs", e.2))
+        .collect();
     let mut notes = format!(
-        "The frame's own work ({} columns: one branch followed per column in `f64`, and the \
-         exact coverage) adds {lo:.0}–{hi:.0} µs to the sweep; the sweep is still the full \
-         circle (`walk::view_range_into` restricts exactly but walks everything).",
-        FRAME.width
+        "A ray-tree frame walks the tree over the field of view only (`walk::ray_tree_range`; \
+         the primary walk is still the full circle): frame / full-circle tree = {} for the \
+         depth-5 scenes, per-column work included. A view frame walks the full view and adds \
+         the frame's own work ({} columns: one branch followed per column in `f64`, and the \
+         exact coverage): {}.",
+        trees.join(", "),
+        FRAME.width,
+        views.join(", "),
     );
     let fps = target.unwrap_or(f64::NAN);
     let _ = write!(
