@@ -4,6 +4,8 @@
 //! single-bit flip of a small file, with and without the checksum recomputed, counts
 //! inflated to the maximum, ids out of range, unknown versions and parts.
 
+mod common;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use vcx::format::{
@@ -921,8 +923,7 @@ fn bad_scene_values_are_named() {
 /// buffers (`Complex::from_slices`), walk — the views equal those of the `alloc` path.
 #[test]
 fn decoded_slices_walk_like_the_owned_complex() {
-    use vcx::geom::sos::Angle;
-    use vcx::partition::{BorderBuffers, BorderSizes};
+    use vcx::partition::BorderSizes;
     let s = without_screens(&example("hall").as_ref());
     let c = build_by_sweep(&s.as_ref()).unwrap();
     let bytes = encode(&s.as_ref(), &c, None, &EncodeOptions::default()).unwrap();
@@ -948,23 +949,9 @@ fn decoded_slices_walk_like_the_owned_complex() {
     )
     .unwrap();
     let sizes = BorderSizes::for_counts(n, v, nc);
-    let mut angles = vec![Angle::ZERO; sizes.angles];
-    let mut ids = vec![CylinderId::ZERO; sizes.ids];
-    let mut offsets = vec![0u32; sizes.offsets];
-    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
+    let mut border = common::BorderVecs::new(sizes);
     let scene = d.scene.as_ref();
-    let walkable = Complex::from_slices(
-        &scene,
-        d.vertices,
-        d.cylinders,
-        BorderBuffers {
-            angles: &mut angles,
-            ids: &mut ids,
-            offsets: &mut offsets,
-            start: &mut start,
-        },
-    )
-    .unwrap();
+    let walkable = Complex::from_slices(&scene, d.vertices, d.cylinders, border.buffers()).unwrap();
     let owned = decode(&bytes).unwrap();
     let mut compared = 0;
     for q in sample_points(&scene, 20, 4) {

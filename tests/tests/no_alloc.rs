@@ -17,6 +17,8 @@
 //!   rebuild, views, counted by the allocator): its views are compared with `walk::view`
 //!   on the owned complex and with the exact reference.
 
+mod common;
+
 use core::fmt::Write as _;
 use std::alloc::System;
 use std::sync::Mutex;
@@ -24,10 +26,7 @@ use std::sync::Mutex;
 use stats_alloc::{Region, StatsAlloc, INSTRUMENTED_SYSTEM};
 use vcx::format::{EncodeOptions, FormatError};
 use vcx::geom::sos::Angle;
-use vcx::partition::{
-    build_by_sweep, BorderBuffers, BorderSizes, BuildOptions, Complex, Cylinder, CylinderId,
-    History,
-};
+use vcx::partition::{build_by_sweep, BorderSizes, BuildOptions, Complex, Cylinder, History};
 use vcx::walk::{view, view_capacity, view_into, ViewInterval, WalkError};
 use vcx::{Material, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_demo::generate::{generate, SceneKind};
@@ -144,10 +143,7 @@ fn view_into_slices_allocates_nothing() {
         let owned = build_by_sweep(&s).expect("build");
         let sizes = BorderSizes::exact(s.len(), owned.vertices().len(), owned.cylinders());
         let (vertices, cylinders) = (owned.vertices().to_vec(), owned.cylinders().to_vec());
-        let mut angles = vec![Angle::ZERO; sizes.angles];
-        let mut ids = vec![CylinderId::ZERO; sizes.ids];
-        let mut offsets = vec![0u32; sizes.offsets];
-        let mut start = vec![[[0u32; 2]; 2]; sizes.start];
+        let mut border = common::BorderVecs::new(sizes);
         let mut out = vec![dummy(); view_capacity(s.len())];
         let points = viewpoints(&s, 12);
         let mut wants = Vec::new();
@@ -157,22 +153,12 @@ fn view_into_slices_allocates_nothing() {
 
         // Rebuilding the derived state allocates nothing either.
         let (n, complex) = allocations(|| {
-            let buffers = BorderBuffers {
-                angles: &mut angles,
-                ids: &mut ids,
-                offsets: &mut offsets,
-                start: &mut start,
-            };
+            let buffers = border.buffers();
             Complex::from_slices(&s, &vertices, &cylinders, buffers).map(|c| c.vertices().len())
         });
         assert_eq!(n, 0, "{name}: rebuild_into allocated");
         assert_eq!(complex, Ok(vertices.len()));
-        let buffers = BorderBuffers {
-            angles: &mut angles,
-            ids: &mut ids,
-            offsets: &mut offsets,
-            start: &mut start,
-        };
+        let buffers = border.buffers();
         let complex = Complex::from_slices(&s, &vertices, &cylinders, buffers).expect("fits");
         assert_eq!(complex.borders_ref().bytes(), sizes.bytes(), "{name}");
 
@@ -195,13 +181,9 @@ fn view_into_slices_allocates_nothing() {
         }
 
         // Without stored angles (computed per wall): same views, still no allocation.
-        let buffers = BorderBuffers {
-            angles: &mut [],
-            ids: &mut ids,
-            offsets: &mut offsets,
-            start: &mut start,
-        };
-        let lean = Complex::from_slices(&s, &vertices, &cylinders, buffers).expect("fits");
+        let mut lean_border = common::BorderVecs::new(BorderSizes { angles: 0, ..sizes });
+        let lean =
+            Complex::from_slices(&s, &vertices, &cylinders, lean_border.buffers()).expect("fits");
         for (q, want) in points.iter().zip(&wants) {
             let (n, got) = allocations(|| view_into(&lean, &s, *q, &mut out));
             assert_eq!(n, 0, "{name}: lean view_into allocated");
@@ -220,16 +202,11 @@ fn short_buffers_are_errors() {
     let s = f.scene.as_ref();
     let c = build_by_sweep(&s).expect("build");
     let sizes = BorderSizes::exact(s.len(), c.vertices().len(), c.cylinders());
-    let mut angles = vec![Angle::ZERO; sizes.angles];
-    let mut ids = vec![CylinderId::ZERO; sizes.ids - 1];
-    let mut offsets = vec![0u32; sizes.offsets];
-    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
-    let buffers = BorderBuffers {
-        angles: &mut angles,
-        ids: &mut ids,
-        offsets: &mut offsets,
-        start: &mut start,
-    };
+    let mut border = common::BorderVecs::new(BorderSizes {
+        ids: sizes.ids - 1,
+        ..sizes
+    });
+    let buffers = border.buffers();
     let err = Complex::from_slices(&s, c.vertices(), c.cylinders(), buffers).unwrap_err();
     assert_eq!((err.buffer, err.needed), ("ids", sizes.ids));
     let bound = BorderSizes::for_counts(s.len(), c.vertices().len(), c.cylinders().len());

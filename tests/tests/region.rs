@@ -6,13 +6,13 @@
 //! the version-2 file round-trips (both decoders) and its corrupt variants are typed
 //! errors, never panics.
 
+mod common;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use vcx::format::{self, decode, decode_into, encode, EncodeOptions, FormatError, Header};
 use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
-use vcx::partition::{
-    build_by_sweep, BorderBuffers, BorderSizes, Complex, ComplexError, Region, RegionError,
-};
+use vcx::partition::{build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError};
 use vcx::walk::{view, view_into, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_demo::{generate, SceneKind};
@@ -437,16 +437,8 @@ fn region_files_round_trip() {
     assert_eq!(d.region, Some(r));
     let ds = d.scene.as_ref();
     let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
-    let mut angles = vec![vcx::geom::sos::Angle::ZERO; sizes.angles];
-    let mut ids = vec![vcx::partition::CylinderId::ZERO; sizes.ids];
-    let mut offsets = vec![0u32; sizes.offsets];
-    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
-    let buffers = BorderBuffers {
-        angles: &mut angles,
-        ids: &mut ids,
-        offsets: &mut offsets,
-        start: &mut start,
-    };
+    let mut border = common::BorderVecs::new(sizes);
+    let buffers = border.buffers();
     let slices = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers)
         .unwrap()
         .with_region(d.region);
@@ -505,16 +497,8 @@ fn walk_decoded_into(bytes: &[u8], q: QueryPoint) {
     };
     let ds = d.scene.as_ref();
     let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
-    let mut angles = vec![vcx::geom::sos::Angle::ZERO; sizes.angles];
-    let mut ids = vec![vcx::partition::CylinderId::ZERO; sizes.ids];
-    let mut offsets = vec![0u32; sizes.offsets];
-    let mut start = vec![[[0u32; 2]; 2]; sizes.start];
-    let buffers = BorderBuffers {
-        angles: &mut angles,
-        ids: &mut ids,
-        offsets: &mut offsets,
-        start: &mut start,
-    };
+    let mut border = common::BorderVecs::new(sizes);
+    let buffers = border.buffers();
     let Ok(c) = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers) else {
         return;
     };

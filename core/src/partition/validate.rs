@@ -85,6 +85,16 @@ pub enum ComplexError {
 
 impl core::error::Error for ComplexError {}
 
+/// A cylinder's interval of the cross-section: its floor, ceiling and arcs.
+fn interval(c: &super::Cylinder) -> Interval {
+    Interval {
+        floor: c.floor,
+        ceiling: c.ceiling,
+        bottom: c.bottom,
+        top: c.top,
+    }
+}
+
 impl core::fmt::Display for ComplexError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
@@ -267,12 +277,7 @@ impl Complex {
             .cylinders
             .iter()
             .filter(|c| c.left == Wall::Zero)
-            .map(|c| Interval {
-                floor: c.floor,
-                ceiling: c.ceiling,
-                bottom: c.bottom,
-                top: c.top,
-            })
+            .map(interval)
             .collect();
         let mut want = cross_section(scene, &Angle::ZERO);
         at_zero.sort();
@@ -313,17 +318,8 @@ impl Complex {
                 cylinder: prefix + i,
             });
         }
-        let mut at_zero: alloc::vec::Vec<Interval> = self
-            .cylinders
-            .iter()
-            .take(prefix)
-            .map(|c| Interval {
-                floor: c.floor,
-                ceiling: c.ceiling,
-                bottom: c.bottom,
-                top: c.top,
-            })
-            .collect();
+        let mut at_zero: alloc::vec::Vec<Interval> =
+            self.cylinders.iter().take(prefix).map(interval).collect();
         let mut want = cross_section(scene, &Angle::ZERO);
         at_zero.sort();
         want.sort();

@@ -1061,19 +1061,7 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     /// The boundary where the hit (or exit) edge changes at vertex `v` seen from `eye`.
     fn split_boundary(&self, eye: QueryPoint, v: usize) -> Boundary {
-        let d = self.toward(eye, v);
-        let dir = d.angle.vector();
-        Boundary {
-            radians: self.map_back(eye, dir),
-            exact: self.hops.is_empty().then_some(d.angle),
-            rule: Rule {
-                hops: self.hops.clone(),
-                eye,
-                dir,
-                level: self.branch.len(),
-                fallback: Some(v),
-            },
-        }
+        self.event_boundary(eye, &self.toward(eye, v))
     }
 
     /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it

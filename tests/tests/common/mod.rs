@@ -1,8 +1,41 @@
-//! Helpers shared by several integration tests (`mod common;`).
+//! Helpers shared by several integration tests (`mod common;`); each test crate uses a
+//! subset.
+#![allow(dead_code)]
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use vcx::geom::sos::Angle;
+use vcx::partition::{BorderBuffers, BorderSizes, CylinderId};
 use vcx::{QueryPoint, SceneRef};
+
+/// Owned buffers of the sizes given for the derived state of `Complex::from_slices`.
+pub struct BorderVecs {
+    angles: Vec<Angle>,
+    ids: Vec<CylinderId>,
+    offsets: Vec<u32>,
+    start: Vec<[[u32; 2]; 2]>,
+}
+
+impl BorderVecs {
+    pub fn new(sizes: BorderSizes) -> BorderVecs {
+        BorderVecs {
+            angles: vec![Angle::ZERO; sizes.angles],
+            ids: vec![CylinderId::ZERO; sizes.ids],
+            offsets: vec![0; sizes.offsets],
+            start: vec![[[0; 2]; 2]; sizes.start],
+        }
+    }
+
+    /// The buffers, borrowed (allocates nothing).
+    pub fn buffers(&mut self) -> BorderBuffers<'_> {
+        BorderBuffers {
+            angles: &mut self.angles,
+            ids: &mut self.ids,
+            offsets: &mut self.offsets,
+            start: &mut self.start,
+        }
+    }
+}
 
 /// A random point of the scene's bounding box (raw query coordinates with random low bits).
 pub fn random_point(rng: &mut ChaCha8Rng, s: &SceneRef<'_>) -> QueryPoint {
