@@ -249,13 +249,12 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
              mean absolute error per column): {}. Why the loose limit is hard: most columns \
              hold no boundary, and one ray per column gets every such column exactly right, \
              so the casters' error at one sample is already small; the complex's exactness \
-             pays at stricter errors. The complex also computes the ray tree over the full \
-             circle while the frame needs {}° (no field-of-view walk for ray trees yet), and \
-             builds the tree by recursion per interval, allocating leaves and branches (the \
-             lock-step walk is later work).",
+             pays at stricter errors. The complex follows only the primary pieces inside the \
+             frame's field of view (`walk::ray_tree_range`), but its primary walk is still \
+             the full circle, and it builds the tree by recursion per interval, allocating \
+             leaves and branches (the lock-step walk is later work).",
             notes.join("\n"),
             target_notes.join("; "),
-            90
         ),
         plots,
         targets,
