@@ -483,6 +483,8 @@ pub fn run(a: &Args) -> Result<(), Failure> {
     let started = Instant::now();
     let date = utc_now();
     let load_before = load_average();
+    // Before the run writes its plots (tracked files when `--out .`).
+    let source = git_revision();
     let mut body = String::new();
     let mut targets = Vec::new();
     let mut progress = Progress::new();
@@ -512,8 +514,9 @@ pub fn run(a: &Args) -> Result<(), Failure> {
     }
     let total = started.elapsed().as_secs_f64();
     let load_after = load_average();
-    let md =
-        header(&sizes, &date, total, load_before, load_after) + &targets_table(&targets) + &body;
+    let md = header(&sizes, &date, source, total, load_before, load_after)
+        + &targets_table(&targets)
+        + &body;
     let path = a.out.join("BENCHMARKS.md");
     write_file(&path, &md)?;
     write_stdout(&format!(
@@ -534,6 +537,7 @@ fn load_average() -> Option<[f64; 3]> {
 fn header(
     sizes: &Sizes,
     date: &str,
+    source: Option<String>,
     total: f64,
     before: Option<[f64; 3]>,
     after: Option<[f64; 3]>,
@@ -567,7 +571,7 @@ fn header(
     let _ = writeln!(md, "| memory | {} |", m.memory);
     let _ = writeln!(md, "| compiler | {} |", m.rustc);
     let _ = writeln!(md, "| build profile | {} |", m.profile);
-    if let Some(rev) = git_revision() {
+    if let Some(rev) = source {
         let _ = writeln!(md, "| source | {rev} |");
     }
     let _ = writeln!(md, "| command | `{}` |", command_line());
