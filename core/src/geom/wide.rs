@@ -118,8 +118,9 @@ impl Wide {
         self.add(&o.neg())
     }
 
-    /// `self mod P` for the prime `P = 2⁶¹ − 1`, in `[0, P)`: equal products have equal
-    /// residues, so different residues prove a product nonzero without computing it.
+    /// `self mod P` for the prime `P = 2⁶¹ − 1`, in `[0, P)`, to test the modular
+    /// arithmetic of callers (`walk::tree` maps directions modulo P) against `Wide`'s.
+    #[cfg(test)]
     pub(crate) fn residue(&self) -> u64 {
         // 2⁶⁴ ≡ 2³ (mod 2⁶¹ − 1): Horner from the top limb.
         let r = self

@@ -26,7 +26,7 @@ use core::cmp::Ordering;
 use super::WalkError;
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
-use crate::geom::wide::{mod_p, residue_i128, Wide};
+use crate::geom::wide::{mod_p, residue_i128, Wide, P};
 use crate::geom::{Point, QueryPoint, Sign};
 use crate::partition::{Complex, Storage};
 use crate::scene::{Material, ObjectId, SceneRef};
@@ -658,16 +658,19 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     fn resolve(&self, rule: &Rule, left: &[ObjectId], right: &[ObjectId]) -> Option<usize> {
         let stages = rule.hops.len();
-        // The boundary direction at every earlier stage, mapped back hop by hop once.
-        let mut mapped: Vec<Option<(Wide, Wide)>> = alloc::vec![None; stages];
-        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
+        // The boundary direction at every earlier stage modulo P, mapped back hop by hop
+        // once: most stages hold no candidate vertex on the ray, which different residues
+        // prove; the 1024-bit mapping is made only when a candidate passes.
+        let mut residues: Vec<Option<(u64, u64)>> = alloc::vec![None; stages];
+        let mut r = Some((residue_i128(rule.dir.0), residue_i128(rule.dir.1)));
         for st in (0..stages).rev() {
             let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
-            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, &d));
-            if let Some(slot) = mapped.get_mut(st) {
-                *slot = d;
+            r = r.and_then(|r| self.map_hop_residue(rule.hops.get(st)?, cur, r));
+            if let Some(slot) = residues.get_mut(st) {
+                *slot = r;
             }
         }
+        let mut mapped: Option<Vec<Option<(Wide, Wide)>>> = None;
         for st in 0..=stages {
             let (eye, level, origin) = match st.checked_sub(1).and_then(|i| rule.hops.get(i)) {
                 None => (rule.hops.first().map_or(rule.eye, |h| h.prev), 0, None),
@@ -691,28 +694,33 @@ impl<S: Storage> Tree<'_, '_, S> {
                     })
                 });
             let hops = rule.hops.get(st..).unwrap_or(&[]);
-            let best = match mapped.get(st).and_then(Option::as_ref) {
+            if hops.is_empty() {
                 // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
-                _ if hops.is_empty() => nearest_on_ray(candidates, |v| {
+                let best = nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
                     (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
-                }),
-                Some(d) => {
-                    let (r0, r1) = (d.0.residue(), d.1.residue());
-                    nearest_on_ray(candidates, |v| {
-                        let w = diff(self.qpoint(v), eye);
-                        // Different residues modulo 2⁶¹ − 1 prove `cross(d, w) ≠ 0`
-                        // exactly, without the 1024-bit products.
-                        let m =
-                            |a: u64, b: i128| mod_p(u128::from(a) * u128::from(residue_i128(b)));
-                        if m(r0, w.1) != m(r1, w.0) {
-                            return None;
-                        }
-                        (Wide::cross(d, w)?.sign() == Sign::Zero)
-                            .then(|| Wide::dot(d, w))
-                            .flatten()
-                    })
+                });
+                return best.or(rule.fallback);
+            }
+            // Different residues of `cross(d, w)`'s two products prove it nonzero.
+            if let Some(&Some((r0, r1))) = residues.get(st) {
+                let m = |a: u64, b: i128| mod_p(u128::from(a) * u128::from(residue_i128(b)));
+                let mut on_ray = candidates.clone().filter(|&v| {
+                    let w = diff(self.qpoint(v), eye);
+                    m(r0, w.1) == m(r1, w.0)
+                });
+                if on_ray.next().is_none() {
+                    continue;
                 }
+            }
+            let mapped = mapped.get_or_insert_with(|| self.map_exact(rule));
+            let best = match mapped.get(st).and_then(Option::as_ref) {
+                Some(d) => nearest_on_ray(candidates, |v| {
+                    let w = diff(self.qpoint(v), eye);
+                    (Wide::cross(d, w)?.sign() == Sign::Zero)
+                        .then(|| Wide::dot(d, w))
+                        .flatten()
+                }),
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
                     let d = self.map_dir(hops, rule.eye, rule.dir);
@@ -730,6 +738,43 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
         }
         rule.fallback
+    }
+
+    /// The boundary direction of `rule` at every stage before the last, mapped back hop by
+    /// hop exactly ([`Tree::map_hop_exact`]); `None` past `Wide`'s budget.
+    fn map_exact(&self, rule: &Rule) -> Vec<Option<(Wide, Wide)>> {
+        let stages = rule.hops.len();
+        let mut mapped: Vec<Option<(Wide, Wide)>> = alloc::vec![None; stages];
+        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
+        for st in (0..stages).rev() {
+            let cur = rule.hops.get(st + 1).map_or(rule.eye, |h| h.prev);
+            d = d.and_then(|d| self.map_hop_exact(rule.hops.get(st)?, cur, &d));
+            if let Some(slot) = mapped.get_mut(st) {
+                *slot = d;
+            }
+        }
+        mapped
+    }
+
+    /// [`Tree::map_hop_exact`] modulo `P` (`wide::mod_p`), up to sign: `None` when the
+    /// hit's denominator may be zero (its residue is), where the exact hop takes the
+    /// edge's midpoint instead. Equal exact directions have equal residues up to sign, so
+    /// different residues of a cross product's two terms prove it nonzero.
+    fn map_hop_residue(&self, hop: &Hop, cur: QueryPoint, d: (u64, u64)) -> Option<(u64, u64)> {
+        let mul = |a: u64, b: u64| mod_p(u128::from(a) * u128::from(b));
+        let add = |a: u64, b: u64| mod_p(u128::from(a) + u128::from(b));
+        let a = self.qpoint(hop.a);
+        let e = diff(self.qpoint(hop.b), a);
+        let (e0, e1) = (residue_i128(e.0), residue_i128(e.1));
+        let den = add(mul(d.0, e1), P - mul(d.1, e0));
+        if den == 0 {
+            return None;
+        }
+        let (num, cp) = (residue_i128(cross(diff(a, cur), e)), diff(cur, hop.prev));
+        Some((
+            add(mul(den, residue_i128(cp.0)), mul(d.0, num)),
+            add(mul(den, residue_i128(cp.1)), mul(d.1, num)),
+        ))
     }
 
     /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `cur` (the eye after
@@ -1505,6 +1550,82 @@ mod tests {
                 (on, r) => panic!("{name}: feature on: {on}, tree {r:?}"),
             }
         }
+    }
+
+    /// The boundary-direction filter of `resolve`: mapped back through hops modulo P it
+    /// agrees (up to sign) with the exact 1024-bit mapping's residue at every stage, and
+    /// gives up exactly where a denominator may vanish (a direction along an edge).
+    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    #[test]
+    fn residue_mapping_agrees_with_the_exact_mapping() {
+        use super::{Hop, Tree, P};
+        use crate::geom::wide::Wide;
+        let s = scene(Material::Mirror);
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let tree = Tree {
+            complex: &c,
+            scene: &s,
+            hops: Vec::new(),
+            branch: Vec::new(),
+        };
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |m: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % (2 * m as u64 + 1)) as i64 - m
+        };
+        let same = |r: (u64, u64), w: (Wide, Wide)| {
+            let (x, y) = (w.0.residue(), w.1.residue());
+            r == (x, y) || r == ((P - x) % P, (P - y) % P)
+        };
+        let mut compared = 0;
+        for round in 0..200 {
+            let hops: Vec<Hop> = (0..1 + round % 5)
+                .map(|_| {
+                    let k = next(5).unsigned_abs() as usize % 4;
+                    let q = |x: i64, y: i64| QueryPoint::from_raw(x << 20, y << 20).unwrap();
+                    Hop {
+                        prev: q(next(1000), next(1000)),
+                        a: 4 + k,
+                        b: 4 + (k + 1) % 4,
+                        next: q(next(1000), next(1000)),
+                        level: 0,
+                    }
+                })
+                .collect();
+            let eye = QueryPoint::from_raw(next(1 << 40), next(1 << 40)).unwrap();
+            // Every fourth round the direction runs along the last hop's edge.
+            let dir = if round % 4 == 0 {
+                let h = hops.last().unwrap();
+                let (a, b) = (tree.qpoint(h.a), tree.qpoint(h.b));
+                (
+                    i128::from(b.x()) - i128::from(a.x()),
+                    i128::from(b.y()) - i128::from(a.y()),
+                )
+            } else {
+                (i128::from(next(1 << 50)), i128::from(next(1 << 50)))
+            };
+            let mut r = Some((
+                crate::geom::wide::residue_i128(dir.0),
+                crate::geom::wide::residue_i128(dir.1),
+            ));
+            let mut d = Some((Wide::from_i128(dir.0), Wide::from_i128(dir.1)));
+            for st in (0..hops.len()).rev() {
+                let cur = hops.get(st + 1).map_or(eye, |h| h.prev);
+                r = r.and_then(|r| tree.map_hop_residue(&hops[st], cur, r));
+                d = d.and_then(|d| tree.map_hop_exact(&hops[st], cur, &d));
+                if round % 4 == 0 && st + 1 == hops.len() {
+                    assert!(r.is_none(), "round {round}: along the edge");
+                }
+                if let (Some(r), Some(d)) = (r, d) {
+                    assert!(same(r, d), "round {round}, stage {st}");
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 300, "{compared}");
     }
 
     /// Depth 0 needs no ray type but screens: the tree is the view in every build.
