@@ -131,8 +131,8 @@ impl Dir {
 /// `boundary_vertex_mirror_corner.rs`).
 #[derive(Clone, Debug)]
 struct Rule {
-    /// The hops up to the stage where the boundary arises.
-    hops: Vec<Hop>,
+    /// The hops up to the stage where the boundary arises (shared with the tree's stack).
+    hops: Rc<[Hop]>,
     /// The eye of that stage and the exact direction of the boundary from it.
     eye: QueryPoint,
     dir: (i128, i128),
@@ -178,7 +178,9 @@ struct Hop {
 struct Tree<'a, 's, S: Storage> {
     complex: &'a Complex<S>,
     scene: &'a SceneRef<'s>,
-    hops: Vec<Hop>,
+    /// The changes of eye down to the current level: replaced, not mutated, on a hop, so
+    /// that every boundary of a level shares it.
+    hops: Rc<[Hop]>,
     branch: Vec<ObjectId>,
 }
 
@@ -235,7 +237,7 @@ fn sweep<S: Storage>(
     let mut tree = Tree {
         complex,
         scene,
-        hops: Vec::new(),
+        hops: Rc::from(Vec::new()),
         branch: Vec::new(),
     };
     let range = range.map(|(f, t)| (Angle::constant(f), Angle::constant(t)));
@@ -370,7 +372,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     radians: f.radians(),
                     exact: Some(f),
                     rule: Rule {
-                        hops: Vec::new(),
+                        hops: self.hops.clone(),
                         eye: q,
                         dir: f.vector(),
                         level: 0,
@@ -519,7 +521,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             radians: self.map_back(eye, dir),
             exact: self.hops.is_empty().then_some(d.angle),
             rule: Rule {
-                hops: self.hops.clone(),
+                hops: Rc::clone(&self.hops),
                 eye,
                 dir,
                 level: self.branch.len(),
@@ -1297,6 +1299,12 @@ impl<S: Storage> Tree<'_, '_, S> {
             .collect()
     }
 
+    /// Pushes `hop` on the stack of hops; returns the stack to restore.
+    fn enter(&mut self, hop: Hop) -> Rc<[Hop]> {
+        let inner = self.hops.iter().copied().chain([hop]).collect();
+        core::mem::replace(&mut self.hops, inner)
+    }
+
     /// Walks the pieces of `(from, to)` seen from `eye` anchored to `m`, one level deeper.
     #[allow(clippy::too_many_arguments)]
     fn deeper(
@@ -1350,10 +1358,10 @@ impl<S: Storage> Tree<'_, '_, S> {
             };
             // Mirrors flip orientation: counter-clockwise from the image of `hi`.
             let (from, to) = self.map_range(&lo, &hi, &hop, true)?;
-            self.hops.push(hop);
+            let outer = self.enter(hop);
             let mut tmp = Vec::new();
             let r = self.deeper(e, m, &from, &to, boundary.clone(), depth, &mut tmp);
-            self.hops.pop();
+            self.hops = outer;
             r?;
             // Back to primary order: reversed, each leaf starting at its successor's start.
             let k = tmp.len();
@@ -1401,9 +1409,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                 level,
             };
             let (from1, to1) = self.map_range(&lo, &hi, &hop, false)?;
-            self.hops.push(hop);
+            let outer = self.enter(hop);
             let r = self.exits(e1, m, eta, &from1, &to1, boundary, depth, level, out);
-            self.hops.pop();
+            self.hops = outer;
             r?;
         }
         Ok(())
@@ -1439,9 +1447,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                 level: level + 1,
             };
             let (from, to) = self.map_range(&lo, &hi, &hop, false)?;
-            self.hops.push(hop);
+            let outer = self.enter(hop);
             let r = self.deeper(e2, m, &from, &to, b2, depth, out);
-            self.hops.pop();
+            self.hops = outer;
             r?;
         }
         Ok(())
@@ -1566,7 +1574,7 @@ mod tests {
         let tree = Tree {
             complex: &c,
             scene: &s,
-            hops: Vec::new(),
+            hops: alloc::rc::Rc::from(Vec::new()),
             branch: Vec::new(),
         };
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
