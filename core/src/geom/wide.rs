@@ -50,7 +50,7 @@ impl Wide {
         let (k0, k1) = (k.1 as u64, (k.1 >> 64) as u64);
         let mut mag = [0u64; LIMBS];
         // Limbs above the highest nonzero one contribute nothing.
-        let used = LIMBS - self.mag.iter().rev().take_while(|&&l| l == 0).count();
+        let used = used(&self.mag);
         for (shift, kl) in [(0, k0), (1, k1)] {
             if kl == 0 {
                 continue;
@@ -86,16 +86,21 @@ impl Wide {
 
     /// `self + o`, `None` past 2¹⁰²⁴.
     pub(crate) fn add(&self, o: &Wide) -> Option<Wide> {
+        // Limbs above both operands' highest nonzero ones stay zero (but for a carry).
+        let used = used(&self.mag).max(used(&o.mag));
         if self.negative == o.negative {
             let mut mag = [0u64; LIMBS];
             let mut carry = false;
-            for (i, slot) in mag.iter_mut().enumerate() {
-                let (s, c1) = self.mag[i].overflowing_add(o.mag[i]);
+            for ((slot, &a), &b) in mag.iter_mut().zip(&self.mag).zip(&o.mag).take(used) {
+                let (s, c1) = a.overflowing_add(b);
                 let (s, c2) = s.overflowing_add(u64::from(carry));
                 *slot = s;
                 carry = c1 || c2;
             }
-            return (!carry).then_some(Wide::new(self.negative, mag));
+            if carry {
+                *mag.get_mut(used)? = 1;
+            }
+            return Some(Wide::new(self.negative, mag));
         }
         // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
         let (big, small) = match cmp_mag(&self.mag, &o.mag) {
@@ -104,8 +109,8 @@ impl Wide {
         };
         let mut mag = [0u64; LIMBS];
         let mut borrow = false;
-        for (i, slot) in mag.iter_mut().enumerate() {
-            let (d, b1) = big.mag[i].overflowing_sub(small.mag[i]);
+        for ((slot, &a), &b) in mag.iter_mut().zip(&big.mag).zip(&small.mag).take(used) {
+            let (d, b1) = a.overflowing_sub(b);
             let (d, b2) = d.overflowing_sub(u64::from(borrow));
             *slot = d;
             borrow = b1 || b2;
@@ -187,6 +192,11 @@ pub(crate) fn residue_i128(v: i128) -> u64 {
     } else {
         r
     }
+}
+
+/// The number of limbs up to the highest nonzero one.
+fn used(mag: &[u64; LIMBS]) -> usize {
+    LIMBS - mag.iter().rev().take_while(|&&l| l == 0).count()
 }
 
 fn cmp_mag(a: &[u64; LIMBS], b: &[u64; LIMBS]) -> Ordering {
@@ -315,6 +325,11 @@ mod tests {
             mag: [u64::MAX; LIMBS],
         };
         assert!(ones.add(&w(1)).is_none());
+        // A carry out of both operands' top limbs lands in the next limb.
+        assert_eq!(w(u64::MAX as i128).add(&w(1)), Some(w(1 << 64)));
+        let all = w(i128::MAX).mul_i128(2).unwrap().add(&w(1)).unwrap(); // 2¹²⁸ − 1
+        assert_eq!(all.add(&w(1)), w(1 << 64).mul_i128(1 << 64));
+        assert_eq!(all.neg().add(&w(-1)), w(-(1 << 64)).mul_i128(1 << 64));
         assert_eq!(ones.sub(&w(1)).unwrap().add(&w(1)), Some(ones));
         assert_eq!(ones.cmp(&ones.sub(&w(1)).unwrap()), Ordering::Greater);
         assert_eq!(ones.neg().cmp(&ones), Ordering::Less);
