@@ -142,9 +142,10 @@ struct Rule {
     fallback: Option<usize>,
 }
 
+/// A boundary between pieces: its primary angle is computed from the rule
+/// ([`Tree::radians`]) only if it starts an interval.
 #[derive(Clone, Debug)]
 struct Boundary {
-    radians: f64,
     exact: Option<Angle>,
     rule: Rule,
 }
@@ -182,6 +183,12 @@ struct Tree<'a, 's, S: Storage> {
     /// that every boundary of a level shares it.
     hops: Rc<[Hop]>,
     branch: Vec<ObjectId>,
+    /// Scratch for the events of an anchored walk.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
+        allow(dead_code)
+    )]
+    events: core::cell::Cell<Vec<(Dir, Option<ObjectId>)>>,
 }
 
 /// The ray trees from the free point `q` to depth `depth` over the full circle: intervals
@@ -239,6 +246,7 @@ fn sweep<S: Storage>(
         scene,
         hops: Rc::from(Vec::new()),
         branch: Vec::new(),
+        events: Default::default(),
     };
     let range = range.map(|(f, t)| (Angle::constant(f), Angle::constant(t)));
     let pieces = match tree.primary(q)? {
@@ -284,7 +292,7 @@ fn sweep<S: Storage>(
             start: if i == 0 {
                 f.radians()
             } else {
-                leaf.boundary.radians
+                tree.radians(&leaf.boundary)
             },
             exact_start: if i == 0 { Some(f) } else { leaf.boundary.exact },
             branch: leaf.branch.clone(),
@@ -369,7 +377,6 @@ impl<S: Storage> Tree<'_, '_, S> {
             if j == 0 && !on_f {
                 p.from = at(f);
                 p.boundary = Boundary {
-                    radians: f.radians(),
                     exact: Some(f),
                     rule: Rule {
                         hops: self.hops.clone(),
@@ -518,7 +525,6 @@ impl<S: Storage> Tree<'_, '_, S> {
     fn event_boundary(&self, eye: QueryPoint, d: &Dir) -> Boundary {
         let dir = d.angle.vector();
         Boundary {
-            radians: self.map_back(eye, dir),
             exact: self.hops.is_empty().then_some(d.angle),
             rule: Rule {
                 hops: Rc::clone(&self.hops),
@@ -530,10 +536,10 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
     }
 
-    /// The primary angle (radians, `f64`) of the direction `dir` from `eye` at the current
-    /// level: intersect with each hop's edge line and continue from the previous eye.
-    fn map_back(&self, eye: QueryPoint, dir: (i128, i128)) -> f64 {
-        let d = self.map_dir(&self.hops, eye, dir);
+    /// The primary angle (radians, `f64`) of a boundary: its direction intersected with
+    /// each hop's edge line, continued from the previous eye.
+    fn radians(&self, b: &Boundary) -> f64 {
+        let d = self.map_dir(&b.rule.hops, b.rule.eye, b.rule.dir);
         let a = libm::atan2(d.1, d.0);
         let tau = 2.0 * core::f64::consts::PI;
         if a < 0.0 {
@@ -647,7 +653,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             .map(|&i| {
                 let (left, right) = (&leaves[(i + m - 1) % m], &leaves[i]);
                 TreeInterval {
-                    start: right.boundary.radians,
+                    start: self.radians(&right.boundary),
                     exact_start: right.boundary.exact,
                     branch: right.branch.clone(),
                     start_vertex: self.resolve(&right.boundary.rule, &left.branch, &right.branch),
@@ -682,6 +688,10 @@ impl<S: Storage> Tree<'_, '_, S> {
             let owners = [left.get(level), right.get(level)];
             // The vertices of the objects this stage hits on either side, beyond the
             // stage's origin edge (a ray leaving a mirror or refractive edge).
+            let origin = origin.map(|(ia, ib)| {
+                let (a, b) = (self.qpoint(ia), self.qpoint(ib));
+                (a, b, side(a, b, eye))
+            });
             let candidates = owners
                 .iter()
                 .enumerate()
@@ -689,9 +699,8 @@ impl<S: Storage> Tree<'_, '_, S> {
                 .filter_map(|(_, id)| self.scene.object(*(*id)?))
                 .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
                 .filter(|&v| {
-                    origin.is_none_or(|(ia, ib)| {
-                        let (a, b) = (self.qpoint(ia), self.qpoint(ib));
-                        let (se, sw) = (side(a, b, eye), side(a, b, self.qpoint(v)));
+                    origin.is_none_or(|(a, b, se)| {
+                        let sw = side(a, b, self.qpoint(v));
                         sw != Sign::Zero && sw != se
                     })
                 });
@@ -1024,7 +1033,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             1
         };
-        let mut events: Vec<(Dir, Option<ObjectId>)> = Vec::new();
+        // The events buffer of the last anchored walk, reused (walks do not nest).
+        let mut events = self.events.take();
+        events.clear();
         self.complex.walk_from(
             self.scene,
             eye,
@@ -1094,6 +1105,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             ceiling: seen,
             boundary: cur_boundary,
         });
+        self.events.set(events);
         Ok(pieces)
     }
 }
@@ -1576,6 +1588,7 @@ mod tests {
             scene: &s,
             hops: alloc::rc::Rc::from(Vec::new()),
             branch: Vec::new(),
+            events: Default::default(),
         };
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = |m: i64| {
