@@ -13,15 +13,25 @@ const LIMBS: usize = 16;
 #[derive(Clone, Copy, PartialEq, Eq, Default, Debug)]
 pub(crate) struct Wide {
     negative: bool,
-    /// Little-endian limbs.
+    /// The number of limbs up to the highest nonzero one: operations run over these only
+    /// (values of a few limbs are the common case).
+    len: u8,
+    /// Little-endian limbs, zero from `len` on.
     mag: [u64; LIMBS],
 }
 
 impl Wide {
-    /// Zero is never negative, so that `==` is equality of values.
-    fn new(negative: bool, mag: [u64; LIMBS]) -> Wide {
-        let negative = negative && mag.iter().any(|&l| l != 0);
-        Wide { negative, mag }
+    /// The value of `mag`, whose limbs from `bound` on are zero. Zero is never negative
+    /// and `len` is minimal, so that `==` is equality of values.
+    fn new(negative: bool, mag: [u64; LIMBS], bound: usize) -> Wide {
+        let len = mag.get(..bound.min(LIMBS)).map_or(0, |m| {
+            m.len() - m.iter().rev().take_while(|&&l| l == 0).count()
+        });
+        Wide {
+            negative: negative && len > 0,
+            len: len as u8,
+            mag,
+        }
     }
 
     pub(crate) fn from_i128(v: i128) -> Wide {
@@ -29,19 +39,26 @@ impl Wide {
         let mut mag = [0; LIMBS];
         mag[0] = m as u64;
         mag[1] = (m >> 64) as u64;
-        Wide::new(v < 0, mag)
+        Wide::new(v < 0, mag, 2)
+    }
+
+    fn limbs(&self) -> &[u64] {
+        self.mag.get(..usize::from(self.len)).unwrap_or(&self.mag)
     }
 
     pub(crate) fn sign(&self) -> Sign {
-        match (self.mag.iter().all(|&l| l == 0), self.negative) {
-            (true, _) => Sign::Zero,
-            (false, true) => Sign::Negative,
-            (false, false) => Sign::Positive,
+        match (self.len, self.negative) {
+            (0, _) => Sign::Zero,
+            (_, true) => Sign::Negative,
+            (_, false) => Sign::Positive,
         }
     }
 
     pub(crate) fn neg(self) -> Wide {
-        Wide::new(!self.negative, self.mag)
+        Wide {
+            negative: !self.negative && self.len > 0,
+            ..self
+        }
     }
 
     /// `self · k`, `None` past 2¹⁰²⁴.
@@ -50,14 +67,14 @@ impl Wide {
         let (k0, k1) = (k.1 as u64, (k.1 >> 64) as u64);
         let mut mag = [0u64; LIMBS];
         // Limbs above the highest nonzero one contribute nothing.
-        let used = used(&self.mag);
+        let used = usize::from(self.len);
         for (shift, kl) in [(0, k0), (1, k1)] {
             if kl == 0 {
                 continue;
             }
             let mut carry: u128 = 0;
-            for i in 0..used {
-                let acc = u128::from(self.mag[i]) * u128::from(kl) + carry;
+            for (i, &l) in self.limbs().iter().enumerate() {
+                let acc = u128::from(l) * u128::from(kl) + carry;
                 match mag.get_mut(i + shift) {
                     Some(slot) => {
                         let sum = u128::from(*slot) + (acc & u128::from(u64::MAX));
@@ -81,13 +98,13 @@ impl Wide {
                 _ => {}
             }
         }
-        Some(Wide::new(self.negative != k.0, mag))
+        Some(Wide::new(self.negative != k.0, mag, used + 2))
     }
 
     /// `self + o`, `None` past 2¹⁰²⁴.
     pub(crate) fn add(&self, o: &Wide) -> Option<Wide> {
         // Limbs above both operands' highest nonzero ones stay zero (but for a carry).
-        let used = used(&self.mag).max(used(&o.mag));
+        let used = usize::from(self.len.max(o.len));
         if self.negative == o.negative {
             let mut mag = [0u64; LIMBS];
             let mut carry = false;
@@ -100,10 +117,10 @@ impl Wide {
             if carry {
                 *mag.get_mut(used)? = 1;
             }
-            return Some(Wide::new(self.negative, mag));
+            return Some(Wide::new(self.negative, mag, used + 1));
         }
         // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
-        let (big, small) = match cmp_mag(&self.mag, &o.mag) {
+        let (big, small) = match cmp_mag(self, o) {
             Ordering::Less => (o, self),
             _ => (self, o),
         };
@@ -115,7 +132,7 @@ impl Wide {
             *slot = d;
             borrow = b1 || b2;
         }
-        Some(Wide::new(big.negative, mag))
+        Some(Wide::new(big.negative, mag, used))
     }
 
     /// `self − o`.
@@ -129,7 +146,7 @@ impl Wide {
     pub(crate) fn residue(&self) -> u64 {
         // 2⁶⁴ ≡ 2³ (mod 2⁶¹ − 1): Horner from the top limb.
         let r = self
-            .mag
+            .limbs()
             .iter()
             .rev()
             .fold(0u64, |r, &l| mod_p((u128::from(r) << 64) + u128::from(l)));
@@ -156,8 +173,8 @@ impl Ord for Wide {
         match (self.negative, o.negative) {
             (false, true) => Ordering::Greater,
             (true, false) => Ordering::Less,
-            (false, false) => cmp_mag(&self.mag, &o.mag),
-            (true, true) => cmp_mag(&o.mag, &self.mag),
+            (false, false) => cmp_mag(self, o),
+            (true, true) => cmp_mag(o, self),
         }
     }
 }
@@ -194,13 +211,11 @@ pub(crate) fn residue_i128(v: i128) -> u64 {
     }
 }
 
-/// The number of limbs up to the highest nonzero one.
-fn used(mag: &[u64; LIMBS]) -> usize {
-    LIMBS - mag.iter().rev().take_while(|&&l| l == 0).count()
-}
-
-fn cmp_mag(a: &[u64; LIMBS], b: &[u64; LIMBS]) -> Ordering {
-    a.iter().rev().cmp(b.iter().rev())
+/// Order of the magnitudes: the longer is larger, else the first differing limb from the top.
+fn cmp_mag(a: &Wide, b: &Wide) -> Ordering {
+    a.len
+        .cmp(&b.len)
+        .then_with(|| a.limbs().iter().rev().cmp(b.limbs().iter().rev()))
 }
 
 #[cfg(test)]
@@ -294,10 +309,7 @@ mod tests {
         assert_eq!(abc.neg().residue(), (P - r) % P);
         // The full-width all-ones magnitude: 2¹⁰²⁴ − 1 ≡ 2⁴⁸ − 1 (1024 = 16·61 + 48 and
         // 2⁶¹ ≡ 1).
-        let ones = Wide {
-            negative: false,
-            mag: [u64::MAX; LIMBS],
-        };
+        let ones = Wide::new(false, [u64::MAX; LIMBS], LIMBS);
         assert_eq!(ones.residue(), (1 << 48) - 1);
     }
 
@@ -320,10 +332,7 @@ mod tests {
         assert!(top.add(&top).is_none());
         assert_eq!(top.sub(&top.neg()), None);
         // All-ones magnitude plus one carries out.
-        let ones = Wide {
-            negative: false,
-            mag: [u64::MAX; LIMBS],
-        };
+        let ones = Wide::new(false, [u64::MAX; LIMBS], LIMBS);
         assert!(ones.add(&w(1)).is_none());
         // A carry out of both operands' top limbs lands in the next limb.
         assert_eq!(w(u64::MAX as i128).add(&w(1)), Some(w(1 << 64)));
