@@ -1819,19 +1819,13 @@ impl History {
     /// only grows), then each entry after every entry with a left wall at or before its
     /// own — on equal walls old entries first, then creation order.
     fn insert_group(&mut self, scene: &SceneRef<'_>, sl: usize, group: &mut [Entry]) {
-        let (Some(list), Some(dead)) = (self.borders.get_mut(sl), self.dead.get_mut(sl)) else {
-            return;
-        };
         let Some(&first) = group.first() else {
             return;
         };
-        if *dead as usize * 4 > list.len() {
-            let before = list.len();
-            let alive = &self.alive;
-            list.retain(|x| alive.get(x.id.index()).is_some_and(|&a| a));
-            self.entries = self.entries.saturating_sub(before - list.len());
-            *dead = 0;
-        }
+        self.compact(sl);
+        let Some(list) = self.borders.get_mut(sl) else {
+            return;
+        };
         let mut list = core::mem::take(list);
         // Stable insertion sort: groups are short and nearly sorted (creation follows θ).
         let greater = |a: &Entry, b: &Entry| self.cmp_entries(scene, a, b) == Ordering::Greater;
@@ -1866,7 +1860,9 @@ impl History {
         }
     }
 
-    fn insert_border(&mut self, scene: &SceneRef<'_>, sl: usize, e: Entry) {
+    /// Drops the destroyed cylinders' entries from border list `sl` once they are more
+    /// than a quarter of it (amortized: each entry is dropped once).
+    fn compact(&mut self, sl: usize) {
         let (Some(list), Some(dead)) = (self.borders.get_mut(sl), self.dead.get_mut(sl)) else {
             return;
         };
@@ -1877,6 +1873,10 @@ impl History {
             self.entries = self.entries.saturating_sub(before - list.len());
             *dead = 0;
         }
+    }
+
+    fn insert_border(&mut self, scene: &SceneRef<'_>, sl: usize, e: Entry) {
+        self.compact(sl);
         let Some(list) = self.borders.get(sl) else {
             return;
         };
