@@ -262,3 +262,78 @@ fn bench_views_frames() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.lines().count() == 1 && err.contains("--fov"), "{err}");
 }
+
+/// `--map --dual` put two square panels right of the frame, which is unchanged; the dual
+/// panel marks every interval start of the exact view on the eye's trace, at the place the
+/// documented coordinates give: θ across, `u = cos θ·(y − c_y) − sin θ·(x − c_x)` up, with
+/// `c` the centre of the bounding box of the scene and the eye and `1.05·r` at the top
+/// (`r` the largest distance from `c` to them).
+#[test]
+fn panels_sit_right_of_the_frame_and_mark_the_view_on_the_trace() {
+    let scene_path = example("grid.json");
+    let (x, y, w, h) = (40.1, 43.15, 300usize, 240usize);
+    let base = ["--at", "40.1,43.15", "--heading", "30", "--fov", "100"];
+    let size = ["--width", "300", "--height", "240"];
+    let (plain, panels) = (out_file("plain.png"), out_file("panels.png"));
+    let args: Vec<&str> = base.iter().chain(&size).copied().collect();
+    render(
+        &[&[scene_path.to_str().unwrap()][..], &args].concat(),
+        &plain,
+    );
+    let more = [&args[..], &["--map", "--dual"]].concat();
+    render(
+        &[&[scene_path.to_str().unwrap()][..], &more].concat(),
+        &panels,
+    );
+    let (fw, fh, frame) = decode(&plain);
+    let (pw, ph, all) = decode(&panels);
+    assert_eq!((fw, fh), (w, h));
+    assert_eq!((pw, ph), (w + 2 * h, h));
+    for row in 0..h {
+        assert_eq!(
+            frame[row * w * 3..(row + 1) * w * 3],
+            all[row * pw * 3..(row * pw + w) * 3],
+            "row {row}"
+        );
+    }
+    let file = vcx_demo::scene_file::load(&scene_path).unwrap();
+    let s = file.scene.as_ref();
+    let c = build_by_sweep(&s).unwrap();
+    let q = QueryPoint::from_f64(x, y).unwrap();
+    let v = view(&c, &s, q).unwrap();
+    let pts: Vec<(f64, f64)> = s
+        .vertices()
+        .iter()
+        .map(|p| p.to_f64())
+        .chain([(x, y)])
+        .collect();
+    let (lo, hi) = pts.iter().fold(
+        (
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        ),
+        |(lo, hi), p| {
+            (
+                (lo.0.min(p.0), lo.1.min(p.1)),
+                (hi.0.max(p.0), hi.1.max(p.1)),
+            )
+        },
+    );
+    let centre = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+    let r = pts
+        .iter()
+        .map(|p| (p.0 - centre.0).hypot(p.1 - centre.1))
+        .fold(0.0, f64::max)
+        * 1.05;
+    let x0 = w + h; // the dual panel follows the map
+    let mut marked = 0;
+    for i in &v {
+        let theta = i.start.radians();
+        let u = theta.cos() * (y - centre.1) - theta.sin() * (x - centre.0);
+        let col = (theta / std::f64::consts::TAU * h as f64).round() as usize;
+        let row = (h as f64 / 2.0 - u / r * (h as f64 / 2.0)).round() as usize;
+        let at = (row.min(h - 1) * pw + x0 + col.min(h - 1)) * 3;
+        marked += usize::from(all[at..at + 3] == [250, 210, 60]);
+    }
+    assert_eq!(marked, v.len(), "{} interval starts", v.len());
+}

@@ -9,6 +9,7 @@ pub mod figures;
 pub mod gen;
 pub mod inspect;
 pub mod locate;
+pub mod panels;
 pub mod render;
 pub mod stability;
 pub mod view;

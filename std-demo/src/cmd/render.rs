@@ -38,7 +38,7 @@ use super::Failure;
 /// Arguments of `vcx render`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (JSON).
+    /// The scene: a scene file (JSON) or a built complex (`.vcx`).
     pub scene: PathBuf,
     /// The viewpoint, `X,Y` in scene units.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
@@ -66,6 +66,15 @@ pub struct Args {
     /// The PNG file to write.
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: PathBuf,
+    /// Add the bird's-eye map (a square panel right of the frame): the floor plan, the
+    /// field of view and the primary ray of every 20th column up to its first hit.
+    #[arg(long)]
+    pub map: bool,
+    /// Add the dual-space panel (a square right of the frame): line space as the (θ, u)
+    /// cylinder with the objects' sheets, the walls of the complex's cylinders, the field
+    /// of view and the eye's trace with the interval starts on it.
+    #[arg(long)]
+    pub dual: bool,
 }
 
 /// Colours of opaque objects, by id modulo 8.
@@ -205,7 +214,24 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         code: EXIT_INTERNAL,
     })?;
     let image = draw(&file, &camera, &seen, args.depth, args.height);
-    write_png(&args.output, args.width, args.height, &image)
+    let mut panels = Vec::new();
+    if args.map {
+        panels.push(super::panels::map(&scene, &camera, &seen, args.height));
+    }
+    if args.dual {
+        // The complex is over the scene without screens at depth 0.
+        let sub = non_screens(&scene);
+        let complex_scene = if args.depth == 0 { sub.as_ref() } else { scene };
+        panels.push(super::panels::dual(
+            &scene,
+            (&built.complex, &complex_scene),
+            &camera,
+            &seen,
+            args.height,
+        ));
+    }
+    let (image, width) = super::panels::beside(&image, args.width, args.height, &panels);
+    write_png(&args.output, width, args.height, &image)
 }
 
 /// The scene's size (largest side of its bounding box, at least 1).
