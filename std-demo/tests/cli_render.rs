@@ -330,7 +330,7 @@ fn panels_sit_right_of_the_frame_and_mark_the_view_on_the_trace() {
     for i in &v {
         let theta = i.start.radians();
         let u = theta.cos() * (y - centre.1) - theta.sin() * (x - centre.0);
-        let col = (theta / std::f64::consts::TAU * h as f64).round() as usize;
+        let col = (theta / core::f64::consts::TAU * h as f64).round() as usize;
         let row = (h as f64 / 2.0 - u / r * (h as f64 / 2.0)).round() as usize;
         let at = (row.min(h - 1) * pw + x0 + col.min(h - 1)) * 3;
         marked += usize::from(all[at..at + 3] == [250, 210, 60]);

@@ -86,7 +86,7 @@ pub fn beside(rgb: &[u8], width: usize, height: usize, panels: &[Canvas]) -> (Ve
     let w = width + panels.iter().map(|p| p.width).sum::<usize>();
     let mut out = Canvas::new(w, h, [0, 0, 0]);
     let mut x0 = 0;
-    for (src, sw, sh) in std::iter::once((rgb, width, height))
+    for (src, sw, sh) in core::iter::once((rgb, width, height))
         .chain(panels.iter().map(|p| (&p.rgb[..], p.width, p.height)))
     {
         for y in 0..sh {
@@ -257,7 +257,7 @@ pub fn dual(
         .map(|(x, y)| (x - centre.0).hypot(y - centre.1))
         .fold(1e-9, f64::max)
         * 1.05;
-    let tau = std::f64::consts::TAU;
+    let tau = core::f64::consts::TAU;
     let x_of = |theta: f64| theta.rem_euclid(tau) / tau * size as f64;
     let y_of = |u: f64| size as f64 / 2.0 - u / radius * (size as f64 / 2.0);
     // The field of view's θ-range, lighter.
@@ -265,7 +265,7 @@ pub fn dual(
     let heading = camera.heading();
     for x in 0..size {
         let theta = (x as f64 + 0.5) / size as f64 * tau;
-        let off = (theta - heading + std::f64::consts::PI).rem_euclid(tau) - std::f64::consts::PI;
+        let off = (theta - heading + core::f64::consts::PI).rem_euclid(tau) - core::f64::consts::PI;
         if off.abs() <= half {
             for y in 0..size {
                 c.blend(x as i64, y as i64, [60, 60, 80], 1.0);
