@@ -35,7 +35,9 @@
 //! shading): a mirror reflects the eye across the hit edge's line, a refractive object
 //! moves it by the tangent law at the entry and at the exit edge ([`transform_eye_f64`]),
 //! exactly the optics of [`crate::walk`] without the rounding of the eyes. The ray casters
-//! of the `vcx-baselines` crate use the same functions.
+//! of the `vcx-baselines` crate use the same functions. [`Hits`] does the same for many
+//! rays of one eye, remembering per level the edge hit and the optics derived from it, and
+//! [`centre_hits`] gives a frame's centre intervals and hits in one pass.
 
 use alloc::vec::Vec;
 use core::cmp::Ordering;
@@ -198,15 +200,32 @@ impl Camera {
         (2.0 * c as f64 / self.width as f64 - 1.0) * self.tan_half
     }
 
-    fn rounded(&self, x: f64) -> Edge {
+    /// The integer vector of the image coordinate `x` (see the module documentation).
+    fn vector_at(&self, x: f64) -> (i64, i64) {
         let d = self.direction_at(x);
-        let m = libm::fmax(libm::fabs(d.0), libm::fabs(d.1));
+        // `max`, not `libm::fmax` (a software routine): the magnitudes are never NaN.
+        let m = libm::fabs(d.0).max(libm::fabs(d.1));
         let k = EDGE_SCALE / m;
-        let v = (round_small(d.0 * k) as i64, round_small(d.1 * k) as i64);
+        (round_small(d.0 * k) as i64, round_small(d.1 * k) as i64)
+    }
+
+    fn rounded(&self, x: f64) -> Edge {
+        let v = self.vector_at(x);
         Edge {
             vector: v,
             x: self.image_x((v.0 as f64, v.1 as f64)),
         }
+    }
+
+    /// The centre vectors of the columns from the left (each [`Camera::centre`]'s
+    /// `vector`), computing each nominal edge coordinate once.
+    fn centre_vectors(&self) -> impl Iterator<Item = (i64, i64)> + '_ {
+        let mut right = self.nominal_x(0);
+        (0..self.width).map(move |c| {
+            let left = right;
+            right = self.nominal_x(c + 1);
+            self.vector_at((left + right) / 2.0)
+        })
     }
 
     /// Column edge `c` (`0` is the left edge of the image, `width` the right edge).
@@ -236,73 +255,64 @@ impl Camera {
         a + (b - a) * (k as f64 + 0.5) / s.max(1) as f64
     }
 
-    /// Where the direction `v` (exact) falls: outside the open field of view, exactly on
-    /// an inner column edge, or inside a column.
-    fn place_exact(&self, v: (i128, i128)) -> Place {
-        let (l, r) = (self.edge(0).vector, self.edge(self.width).vector);
-        // Inside the open arc (R, L) of width < π: R → v and v → L both turn left.
-        if cross_w(r, v) <= 0 || cross_w(l, v) >= 0 {
-            return Place::Outside;
-        }
-        // First inner edge c (1 ≤ c ≤ W) with v on its left (cross(e_c, v) ≥ 0).
-        let (mut lo, mut hi) = (1, self.width);
-        for _ in 0..64 {
-            if lo >= hi {
-                break;
+    /// The start of `iv` if it lies strictly inside the field of view whose outer edges
+    /// are `left` and `right` (the camera's edges 0 and `width`): decided exactly for an
+    /// exact start, by its `f64` image coordinate otherwise.
+    fn inside<I: Interval>(&self, iv: &I, left: &Edge, right: &Edge) -> Option<Bound> {
+        match iv.exact_start() {
+            Some(s) => {
+                let v = s.vector();
+                // Inside the open arc (R, L) of width < π: R → v and v → L both turn left.
+                (cross_w(right.vector, v) > 0 && cross_w(left.vector, v) < 0)
+                    .then_some(Bound::Exact(v))
             }
-            let mid = lo + (hi - lo) / 2;
-            if cross_w(self.edge(mid).vector, v) >= 0 {
-                hi = mid;
-            } else {
-                lo = mid + 1;
-            }
-        }
-        if lo < self.width && cross_w(self.edge(lo).vector, v) == 0 {
-            return Place::OnEdge(lo);
-        }
-        let column = lo - 1;
-        let (vx, vy) = (v.0 as f64, v.1 as f64);
-        Place::Inside {
-            column,
-            x: self.image_x((vx, vy)),
-        }
-    }
-
-    /// As [`Camera::place_exact`] for a direction known in `f64` only (radians).
-    fn place_f64(&self, radians: f64) -> Place {
-        let d = (libm::cos(radians), libm::sin(radians));
-        if d.0 * self.forward.0 + d.1 * self.forward.1 <= 0.0 {
-            return Place::Outside;
-        }
-        let x = self.image_x(d);
-        if !(x > self.edge(0).x && x < self.edge(self.width).x) {
-            return Place::Outside;
-        }
-        let (mut lo, mut hi) = (1, self.width);
-        for _ in 0..64 {
-            if lo >= hi {
-                break;
-            }
-            let mid = lo + (hi - lo) / 2;
-            if self.edge(mid).x >= x {
-                hi = mid;
-            } else {
-                lo = mid + 1;
+            None => {
+                let radians = iv.start_radians();
+                let d = (libm::cos(radians), libm::sin(radians));
+                if d.0 * self.forward.0 + d.1 * self.forward.1 <= 0.0 {
+                    return None;
+                }
+                let x = self.image_x(d);
+                (x > left.x && x < right.x).then_some(Bound::Approx(x))
             }
         }
-        if lo < self.width && self.edge(lo).x == x {
-            return Place::OnEdge(lo);
-        }
-        Place::Inside { column: lo - 1, x }
     }
 }
 
-/// Where a boundary falls on the image.
+/// A boundary strictly inside the field of view: its exact direction, or its image
+/// coordinate when it is known in `f64` only.
 #[derive(Clone, Copy, Debug)]
-enum Place {
-    Outside,
-    OnEdge(usize),
-    Inside { column: usize, x: f64 },
+enum Bound {
+    Exact((i128, i128)),
+    Approx(f64),
+}
+
+impl Bound {
+    /// Where the boundary lies against the edge (or centre) `e`: `Greater` strictly left of
+    /// it (counter-clockwise), `Equal` on it, `Less` right of it. Exact for an exact
+    /// boundary (the sign of `cross(e, v)`).
+    #[inline]
+    fn side(&self, e: &Edge) -> Ordering {
+        self.side_of(e.vector, || e.x)
+    }
+
+    /// [`Bound::side`] for the direction `e` of image coordinate `x()` (asked only for a
+    /// boundary known in `f64`).
+    #[inline]
+    fn side_of(&self, e: (i64, i64), x: impl FnOnce() -> f64) -> Ordering {
+        match self {
+            Bound::Exact(v) => cross_w(e, *v).cmp(&0),
+            Bound::Approx(b) => x().partial_cmp(b).unwrap_or(Ordering::Less),
+        }
+    }
+
+    /// The image coordinate (output).
+    fn x(&self, camera: &Camera) -> f64 {
+        match self {
+            Bound::Exact(v) => camera.image_x((v.0 as f64, v.1 as f64)),
+            Bound::Approx(x) => *x,
+        }
+    }
 }
 
 fn cross_i(u: (i64, i64), v: (i64, i64)) -> i128 {
@@ -372,17 +382,6 @@ impl Probe {
         }
     }
 
-    /// Whether interval `k` contains the probe: it starts at or before it and the next one
-    /// after it; the last interval wraps through θ = 0.
-    fn within<I: Interval>(&self, intervals: &[I], k: usize) -> bool {
-        let starts = |i: usize| intervals.get(i).is_some_and(|x| self.after_start(x));
-        if k + 1 < intervals.len() {
-            starts(k) && !starts(k + 1)
-        } else {
-            starts(k) || !starts(0)
-        }
-    }
-
     fn find<I: Interval>(&self, intervals: &[I]) -> usize {
         let p = intervals.partition_point(|s| self.after_start(s));
         if p == 0 {
@@ -428,7 +427,8 @@ pub struct Piece {
 /// (sorted by start angle, the last wrapping through θ = 0, as [`crate::walk::view`] and
 /// [`crate::walk::ray_tree`] return them). Calls `emit` for every piece of positive width,
 /// column by column from the left, each column's pieces from left to right. Allocates
-/// nothing; O(W + boundaries in view · log W). An empty `intervals` emits nothing.
+/// nothing; O(W + boundaries in view + log intervals): columns and boundaries are merged
+/// left to right, each column edge computed once. An empty `intervals` emits nothing.
 pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl FnMut(Piece)) {
     let n = intervals.len();
     let w = camera.width;
@@ -446,10 +446,13 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
     {
         cur = (cur + n - 1) % n;
     }
+    let right = camera.edge(w);
+    // Column `col` spans the edges `a` to `b`, each computed once per frame; its part left
+    // of `x` is done.
     let mut col = 0;
+    let (mut a, mut b) = (left, camera.edge(1));
     let mut x = left.x;
-    let mut piece = |col: usize, interval: usize, from: f64, to: f64| {
-        let (a, b) = (camera.edge(col).x, camera.edge(col + 1).x);
+    let mut piece = |col: usize, interval: usize, (a, b): (f64, f64), from: f64, to: f64| {
         let (from, to) = (from.clamp(a, b), to.clamp(a, b));
         if to > from {
             emit(Piece {
@@ -462,39 +465,39 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
         }
     };
     // Boundaries clockwise from the left edge: the start of the current interval, then of
-    // the one before, … until one lies outside the field of view.
+    // the one before, … until one lies outside the field of view. Boundaries and columns
+    // are merged left to right: O(W + boundaries in view).
     if n > 1 {
         for _ in 0..n {
             let Some(iv) = intervals.get(cur) else { break };
-            let place = match iv.exact_start() {
-                Some(s) => camera.place_exact(s.vector()),
-                None => camera.place_f64(iv.start_radians()),
+            let Some(bound) = camera.inside(iv, &left, &right) else {
+                break;
             };
-            let (bcol, bx) = match place {
-                Place::Outside => break,
-                Place::OnEdge(c) => (c, camera.edge(c).x),
-                Place::Inside { column, x } => (column, x),
-            };
-            if bcol < col {
-                // Out of order (an `f64` boundary next to an exact one): already passed.
-                cur = (cur + n - 1) % n;
-                continue;
-            }
-            while col < bcol {
-                piece(col, cur, x, f64::INFINITY);
+            // Columns whose right edge is at or left of the boundary end before it (a
+            // boundary exactly on an inner edge makes no piece).
+            while col + 1 < w && bound.side(&b) != Ordering::Greater {
+                piece(col, cur, (a.x, b.x), x, f64::INFINITY);
                 col += 1;
-                x = camera.edge(col).x;
+                a = b;
+                b = camera.edge(col + 1);
+                x = a.x;
             }
-            let bx = bx.max(x);
-            piece(col, cur, x, bx);
-            x = bx;
+            // A boundary at or left of the column's left edge is already passed (an `f64`
+            // boundary out of order next to an exact one, or one exactly on the edge).
+            if bound.side(&a) == Ordering::Less {
+                let bx = bound.x(camera).max(x);
+                piece(col, cur, (a.x, b.x), x, bx);
+                x = bx;
+            }
             cur = (cur + n - 1) % n;
         }
     }
     while col < w {
-        piece(col, cur, x, f64::INFINITY);
+        piece(col, cur, (a.x, b.x), x, f64::INFINITY);
         col += 1;
-        x = camera.edge(col).x;
+        a = b;
+        b = camera.edge(col + 1);
+        x = a.x;
     }
 }
 
@@ -517,25 +520,76 @@ pub fn angle_order<I: Interval>(intervals: &mut [I]) {
 /// The interval seen through the centre of each column (exactly, see [`interval_at`]),
 /// written into `out` (its first `min(out.len(), width)` columns).
 ///
-/// Columns run clockwise, so the interval of the next column is the same one or an
-/// earlier one: each column first tries those two (two comparisons each), and searches
-/// by bisection only when neither holds it. O(W + intervals) for a frame.
+/// Columns run clockwise: the first centre is placed by bisection, then centres and the
+/// boundaries in view are merged, one comparison per column and per boundary passed
+/// (exact for an exact start, by image coordinate for a start known in `f64` only, as
+/// [`coverage`] places it). O(W + log intervals) for a frame.
 pub fn centre_intervals<I: Interval>(camera: &Camera, intervals: &[I], out: &mut [usize]) {
-    let n = intervals.len();
-    if n == 0 {
+    if intervals.is_empty() {
         out.iter_mut().for_each(|s| *s = 0);
         return;
     }
-    let mut k = None;
-    for (c, slot) in out.iter_mut().enumerate().take(camera.width) {
-        let p = Probe::new(camera.centre(c).angle());
-        let found = match k {
-            Some(k) if p.within(intervals, k) => k,
-            Some(k) if p.within(intervals, (k + n - 1) % n) => (k + n - 1) % n,
-            _ => p.find(intervals),
-        };
-        *slot = found;
-        k = Some(found);
+    let mut sweep = None;
+    for (slot, centre) in out.iter_mut().zip(camera.centre_vectors()) {
+        *slot = sweep
+            .get_or_insert_with(|| Centres::new(camera, intervals, centre))
+            .next(centre);
+    }
+}
+
+/// The merge of column centres (left to right) with the interval starts (clockwise).
+struct Centres<'a, I> {
+    camera: &'a Camera,
+    intervals: &'a [I],
+    left: Edge,
+    right: Edge,
+    /// The interval of the last centre, and its start if it lies inside the field of
+    /// view (a start outside is right of every centre still to come).
+    cur: usize,
+    at: Option<Bound>,
+    /// Starts passed: after all `n`, the sweep went round the circle (every start in view).
+    passed: usize,
+}
+
+impl<'a, I: Interval> Centres<'a, I> {
+    /// The sweep at the first centre (its interval found by bisection, exactly).
+    fn new(camera: &'a Camera, intervals: &'a [I], first: (i64, i64)) -> Self {
+        let (left, right) = (camera.edge(0), camera.edge(camera.width));
+        let first = Direction::new(first.0, first.1).unwrap_or(Direction { x: 1, y: 0 });
+        let cur = interval_at(intervals, &Angle::constant(first));
+        let at = intervals
+            .get(cur)
+            .and_then(|iv| camera.inside(iv, &left, &right));
+        Centres {
+            camera,
+            intervals,
+            left,
+            right,
+            cur,
+            at,
+            passed: 0,
+        }
+    }
+
+    /// The interval through `centre`, right of the previous centre: past every start
+    /// strictly left of it (a start exactly on it begins its interval).
+    fn next(&mut self, centre: (i64, i64)) -> usize {
+        let n = self.intervals.len();
+        let camera = self.camera;
+        let x = || camera.image_x((centre.0 as f64, centre.1 as f64));
+        while self.passed < n {
+            match self.at {
+                Some(b) if b.side_of(centre, x) == Ordering::Greater => {}
+                _ => break,
+            }
+            self.cur = (self.cur + n - 1) % n;
+            self.passed += 1;
+            self.at = self
+                .intervals
+                .get(self.cur)
+                .and_then(|iv| self.camera.inside(iv, &self.left, &self.right));
+        }
+        self.cur
     }
 }
 
@@ -795,6 +849,418 @@ pub fn hit_along(
         length,
         facing,
     })
+}
+
+/// Follows the branches along many rays of one eye, as [`hit_along`] does along each, but
+/// remembering per level of the last branch the hit edge and the optics derived from it
+/// (unit normal, the next virtual eye): neighbouring columns mostly see the same branch
+/// through the same edges, and then a level costs a test that the ray still crosses the
+/// remembered edge and the parameter where it does, instead of clipping the polygon. A
+/// fixed-size value (no heap); reuse one for the columns of a frame.
+///
+/// Through mirrors only, the remembered levels are linear forms of the primary direction
+/// (the unfolded ray is straight), and a ray that still crosses every remembered edge
+/// costs a few dot products per level.
+///
+/// The optics are taken at the hit edge's first vertex rather than at the hit point, so
+/// that they do not depend on which ray computed them: the result is [`hit_along`]'s up to
+/// `f64` rounding whichever rays came before (and up to which of two edges a ray exactly
+/// through a vertex meets).
+#[derive(Clone, Debug)]
+pub struct Hits {
+    /// The eye of the remembered levels.
+    eye: (f64, f64),
+    /// Levels `0..len` are remembered for `eye`.
+    len: usize,
+    levels: [Level; MAX_BRANCH],
+}
+
+/// Edge `k` of a polygon (counter-clockwise), its endpoints and unit outward normal.
+#[derive(Clone, Copy, Debug)]
+struct Side {
+    k: usize,
+    a: (f64, f64),
+    b: (f64, f64),
+    n: (f64, f64),
+}
+
+impl Side {
+    const NONE: Side = Side {
+        k: usize::MAX,
+        a: (f64::NAN, f64::NAN),
+        b: (f64::NAN, f64::NAN),
+        n: (f64::NAN, f64::NAN),
+    };
+
+    fn of(poly: &[crate::Point], k: usize) -> Option<Side> {
+        let (a, b) = (
+            poly.get(k)?.to_f64(),
+            poly.get((k + 1) % poly.len())?.to_f64(),
+        );
+        let (nx, ny) = (b.1 - a.1, a.0 - b.0);
+        let l = norm(nx, ny);
+        (l > 0.0).then_some(Side {
+            k,
+            a,
+            b,
+            n: (nx / l, ny / l),
+        })
+    }
+
+    /// The parameter where the ray `o + t·d` crosses this side of `poly`, if the side is
+    /// still `poly`'s edge `k` and the ray enters the polygon through it (`leaving`: leaves
+    /// it): then it is what [`clip_polygon`] returns for the side, the same arithmetic.
+    fn meet(
+        &self,
+        poly: &[crate::Point],
+        o: (f64, f64),
+        d: (f64, f64),
+        leaving: bool,
+    ) -> Option<f64> {
+        let a = poly.get(self.k)?.to_f64();
+        let b = poly.get((self.k + 1) % poly.len())?.to_f64();
+        if a != self.a || b != self.b {
+            return None;
+        }
+        let nrm = (b.1 - a.1, a.0 - b.0);
+        let num = nrm.0 * (a.0 - o.0) + nrm.1 * (a.1 - o.1);
+        let den = nrm.0 * d.0 + nrm.1 * d.1;
+        // Which side of the ray's line each endpoint lies on.
+        let sa = d.0 * (a.1 - o.1) - d.1 * (a.0 - o.0);
+        let sb = d.0 * (b.1 - o.1) - d.1 * (b.0 - o.0);
+        let crosses = if leaving {
+            den > 0.0 && sa <= 0.0 && sb >= 0.0
+        } else {
+            den < 0.0 && sa >= 0.0 && sb <= 0.0
+        };
+        crosses.then(|| num / den)
+    }
+}
+
+/// One remembered level of a [`Hits`]: valid for the eye of this level (determined by the
+/// levels before).
+#[derive(Clone, Copy, Debug)]
+struct Level {
+    id: ObjectId,
+    material: Material,
+    /// The edge the ray enters through.
+    entry: Side,
+    /// Whether `inner`, `exit` and `next` are computed (not for the last level of a branch).
+    optics: bool,
+    /// A refractive object: the eye inside, and the edge the ray leaves through.
+    inner: (f64, f64),
+    exit: Side,
+    /// The eye of the next level.
+    next: (f64, f64),
+    /// When every level before is a mirror: the level in terms of the primary direction.
+    lin: Option<Unfolded>,
+}
+
+/// A level reached through mirrors only, as linear forms of the unit primary direction
+/// `u`: the level's ray is the line through its eye `e` along `M·u` (`M` the product of
+/// the reflections before), so which side of that line the entry edge's endpoints lie on,
+/// the edge normal's component along the ray, and the distance from `e` to the edge are
+/// dot products with `u` (the unfolded ray is straight: that distance is the length of the
+/// whole path).
+#[derive(Clone, Copy, Debug)]
+struct Unfolded {
+    /// The entry edge's vertices as stored (the scene must still have them).
+    pa: crate::Point,
+    pb: crate::Point,
+    /// `cross(M·u, a − e) = qa·u` and `cross(M·u, b − e) = qb·u`.
+    qa: (f64, f64),
+    qb: (f64, f64),
+    /// `nrm·(M·u) = wd·u` for the edge's outward normal `nrm` (not normalized), and
+    /// `num = nrm·(a − e)`: the distance from `e` is `num / (wd·u)`.
+    wd: (f64, f64),
+    num: f64,
+    /// `n·(M·u) = wn·u` for the unit normal `n` (the facing).
+    wn: (f64, f64),
+}
+
+/// `Mᵀ·r` for the 2×2 matrix `m` (rows).
+fn mt(m: &[[f64; 2]; 2], r: (f64, f64)) -> (f64, f64) {
+    (m[0][0] * r.0 + m[1][0] * r.1, m[0][1] * r.0 + m[1][1] * r.1)
+}
+
+fn dot(a: (f64, f64), b: (f64, f64)) -> f64 {
+    a.0 * b.0 + a.1 * b.1
+}
+
+impl Unfolded {
+    /// Level data for the entry edge `side` of `poly`, the eye `e` and the product `m` of
+    /// the reflections before.
+    fn new(poly: &[crate::Point], side: &Side, e: (f64, f64), m: &[[f64; 2]; 2]) -> Option<Self> {
+        let pa = *poly.get(side.k)?;
+        let pb = *poly.get((side.k + 1) % poly.len())?;
+        let (a, b) = (side.a, side.b);
+        let nrm = (b.1 - a.1, a.0 - b.0);
+        let (ra, rb) = ((a.0 - e.0, a.1 - e.1), (b.0 - e.0, b.1 - e.1));
+        Some(Unfolded {
+            pa,
+            pb,
+            qa: mt(m, (ra.1, -ra.0)),
+            qb: mt(m, (rb.1, -rb.0)),
+            wd: mt(m, nrm),
+            num: dot(nrm, ra),
+            wn: mt(m, side.n),
+        })
+    }
+}
+
+/// `R·m` for the reflection `R = I − 2·n·nᵀ` across a line of unit normal `n`.
+fn reflect(m: &[[f64; 2]; 2], n: (f64, f64)) -> [[f64; 2]; 2] {
+    let (a, b, c) = (
+        1.0 - 2.0 * n.0 * n.0,
+        -2.0 * n.0 * n.1,
+        1.0 - 2.0 * n.1 * n.1,
+    );
+    [
+        [a * m[0][0] + b * m[1][0], a * m[0][1] + b * m[1][1]],
+        [b * m[0][0] + c * m[1][0], b * m[0][1] + c * m[1][1]],
+    ]
+}
+
+impl Level {
+    const EMPTY: Level = Level {
+        id: ObjectId(u32::MAX),
+        material: Material::Opaque,
+        entry: Side::NONE,
+        optics: false,
+        inner: (f64::NAN, f64::NAN),
+        exit: Side::NONE,
+        next: (f64::NAN, f64::NAN),
+        lin: None,
+    };
+}
+
+impl Default for Hits {
+    fn default() -> Self {
+        Hits::new()
+    }
+}
+
+impl Hits {
+    /// Nothing remembered.
+    pub const fn new() -> Hits {
+        Hits {
+            eye: (f64::NAN, f64::NAN),
+            len: 0,
+            levels: [Level::EMPTY; MAX_BRANCH],
+        }
+    }
+
+    /// Forgets the remembered levels (never needed for correctness: a level is used only
+    /// for the same eye, objects, materials and edge coordinates).
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// As [`hit_along`]`(scene, eye, dir, branch)`, reusing what the previous calls found
+    /// (see [`Hits`]).
+    pub fn along(
+        &mut self,
+        scene: &SceneRef<'_>,
+        eye: QueryPoint,
+        dir: (f64, f64),
+        branch: &[ObjectId],
+    ) -> Option<Hit> {
+        if branch.len() > MAX_BRANCH {
+            return hit_along(scene, eye, dir, branch);
+        }
+        let e = eye.to_f64();
+        if e != self.eye {
+            self.eye = e;
+            self.len = 0;
+        }
+        if branch.len() <= self.len {
+            if let Some(hit) = self.unfolded(scene, dir, branch) {
+                return Some(hit);
+            }
+        }
+        let old = self.len;
+        let (mut done, mut same) = (0, true);
+        let hit = self.walk(scene, dir, branch, old, &mut done, &mut same);
+        // Deeper remembered levels stay valid only if every level was reused.
+        self.len = if hit.is_some() && same { old } else { done };
+        hit
+    }
+
+    /// [`Hits::along`] when the remembered levels hold `branch` through mirrors and the
+    /// ray still crosses every remembered entry edge (`None` otherwise): a few dot
+    /// products per level.
+    fn unfolded(&self, scene: &SceneRef<'_>, dir: (f64, f64), branch: &[ObjectId]) -> Option<Hit> {
+        let l = norm(dir.0, dir.1);
+        if l.is_nan() || l <= 0.0 {
+            return None;
+        }
+        let u = (dir.0 / l, dir.1 / l);
+        let last = branch.len().checked_sub(1)?;
+        let mut first = 0.0;
+        for (level, (&id, lv)) in branch.iter().zip(&self.levels).enumerate() {
+            let lin = lv.lin.as_ref()?;
+            let through = lv.optics && matches!(lv.material, Material::Mirror);
+            if lv.id != id || (level < last && !through) {
+                return None;
+            }
+            let obj = scene.object(id)?;
+            let poly = scene.polygon(obj);
+            if obj.material != lv.material
+                || poly.get(lv.entry.k) != Some(&lin.pa)
+                || poly.get((lv.entry.k + 1) % poly.len()) != Some(&lin.pb)
+            {
+                return None;
+            }
+            let den = dot(lin.wd, u);
+            if !(den < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
+                return None;
+            }
+            let t = (lin.num / den).max(0.0);
+            if level == 0 {
+                first = t;
+            }
+            if level == last {
+                return Some(Hit {
+                    first,
+                    length: t,
+                    facing: libm::fabs(dot(lin.wn, u)),
+                });
+            }
+        }
+        None
+    }
+
+    /// [`Hits::along`]: `done` counts the levels now remembered for this branch, `same`
+    /// whether all of them were reused (levels `0..old` were remembered before).
+    fn walk(
+        &mut self,
+        scene: &SceneRef<'_>,
+        dir: (f64, f64),
+        branch: &[ObjectId],
+        old: usize,
+        done: &mut usize,
+        same: &mut bool,
+    ) -> Option<Hit> {
+        let l = norm(dir.0, dir.1);
+        if branch.is_empty() || l <= 0.0 {
+            return None;
+        }
+        let mut e = self.eye;
+        let mut o = e;
+        let mut d = (dir.0 / l, dir.1 / l);
+        let (mut first, mut length, mut facing) = (0.0, 0.0, 1.0);
+        // The product of the reflections so far, while every level is a mirror.
+        let mut m = Some([[1.0, 0.0], [0.0, 1.0]]);
+        for (level, &id) in branch.iter().enumerate() {
+            let obj = scene.object(id)?;
+            let poly = scene.polygon(obj);
+            let lv = self.levels.get_mut(level)?;
+            let reuse = *same && level < old && lv.id == id && lv.material == obj.material;
+            let t = match reuse.then(|| lv.entry.meet(poly, o, d, false)).flatten() {
+                Some(t) => t,
+                None => {
+                    *same = false;
+                    let (t, k, _, _) = clip_polygon(poly, o, d)?;
+                    let entry = Side::of(poly, k)?;
+                    *lv = Level {
+                        id,
+                        material: obj.material,
+                        entry,
+                        lin: m.as_ref().and_then(|m| Unfolded::new(poly, &entry, e, m)),
+                        ..Level::EMPTY
+                    };
+                    t
+                }
+            };
+            let t = t.max(0.0);
+            let p = (o.0 + t * d.0, o.1 + t * d.1);
+            length += t;
+            if level == 0 {
+                first = t;
+            }
+            let nrm = lv.entry.n;
+            facing = libm::fabs(d.0 * nrm.0 + d.1 * nrm.1);
+            if level + 1 == branch.len() {
+                *done = level + 1;
+                break;
+            }
+            let fresh = !(*same && lv.optics);
+            if fresh {
+                *same = false;
+                lv.optics = false;
+            }
+            // As in `hit_along`: a ray type compiled out takes no branch past its objects.
+            let np = match obj.material {
+                Material::Mirror if cfg!(feature = "mirrors") => {
+                    if fresh {
+                        lv.next = transform_eye_f64(e, lv.entry.a, nrm, -1.0);
+                    }
+                    m = m.map(|m| reflect(&m, nrm));
+                    p
+                }
+                Material::Refractive { eta } if cfg!(feature = "refraction") => {
+                    m = None;
+                    let eta = eta.to_f64();
+                    if fresh {
+                        lv.inner = transform_eye_f64(e, lv.entry.a, nrm, eta);
+                    }
+                    let d1 = unit((p.0 - lv.inner.0, p.1 - lv.inner.1))?;
+                    let t2 = match (!fresh).then(|| lv.exit.meet(poly, p, d1, true)).flatten() {
+                        Some(t2) => t2,
+                        None => {
+                            *same = false;
+                            lv.optics = false;
+                            let (_, _, t2, exit) = clip_polygon(poly, p, d1)?;
+                            lv.exit = Side::of(poly, exit)?;
+                            lv.next = transform_eye_f64(lv.inner, lv.exit.a, lv.exit.n, 1.0 / eta);
+                            t2
+                        }
+                    };
+                    let t2 = t2.max(0.0);
+                    length += t2;
+                    (p.0 + t2 * d1.0, p.1 + t2 * d1.1)
+                }
+                // Opaque objects end a branch; screens are never in one.
+                _ => return None,
+            };
+            lv.optics = true;
+            d = unit((np.0 - lv.next.0, np.1 - lv.next.1))?;
+            e = lv.next;
+            o = np;
+            *done = level + 1;
+        }
+        Some(Hit {
+            first,
+            length,
+            facing,
+        })
+    }
+}
+
+/// The interval through each column's centre (as [`centre_intervals`]) and the hit along
+/// its branch (as [`hit_along`] along [`Camera::centre`], through one [`Hits`]): calls
+/// `each(column, interval, hit)` for every column from the left. Allocates nothing;
+/// O(W + log intervals) besides the hits.
+pub fn centre_hits<I: Interval>(
+    scene: &SceneRef<'_>,
+    camera: &Camera,
+    intervals: &[I],
+    mut each: impl FnMut(usize, usize, Option<Hit>),
+) {
+    let mut hits = Hits::new();
+    let mut sweep = None;
+    for (c, centre) in camera.centre_vectors().enumerate() {
+        let k = if intervals.is_empty() {
+            0
+        } else {
+            sweep
+                .get_or_insert_with(|| Centres::new(camera, intervals, centre))
+                .next(centre)
+        };
+        let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
+        let dir = (centre.0 as f64, centre.1 as f64);
+        each(c, k, hits.along(scene, camera.eye, dir, branch));
+    }
 }
 
 /// `|(x, y)|` for output: the components stay far below 2⁵¹¹ (scene coordinates and

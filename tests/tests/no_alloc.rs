@@ -442,3 +442,39 @@ fn the_counter_sees_allocations() {
         size_of::<app::Ram>(),
     );
 }
+
+/// The per-column work of a frame (`render::centre_intervals`, `render::centre_hits`,
+/// `render::coverage` into a caller's column buffer) allocates nothing, and the sweep of
+/// `centre_hits` finds the intervals `centre_intervals` does.
+#[test]
+fn frame_columns_allocate_nothing() {
+    use vcx::render::{centre_hits, centre_intervals, coverage, Camera};
+    let _g = lock();
+    let path = repo_path("std-demo/scenes/hall.json");
+    let scene = vcx_demo::scene_file::load(&path).expect("hall").scene;
+    let s = scene.as_ref();
+    let complex = build_by_sweep(&s).expect("build");
+    let mut checked = 0;
+    for q in viewpoints(&s, 6) {
+        let tree = vcx::walk::ray_tree(&complex, &s, q, 4).expect("ray tree");
+        let camera = Camera::new(q, 0.3 + checked as f64, 1.4, 400).expect("camera");
+        let (mut centre, mut seen) = (vec![0usize; 400], vec![usize::MAX; 400]);
+        let (n, sum) = allocations(|| {
+            let mut sum = 0.0;
+            centre_intervals(&camera, &tree, &mut centre);
+            centre_hits(&s, &camera, &tree, |c, k, hit| {
+                if let Some(slot) = seen.get_mut(c) {
+                    *slot = k;
+                }
+                sum += hit.map_or(0.0, |h| h.length);
+            });
+            coverage(&camera, &tree, |p| sum += p.fraction);
+            sum
+        });
+        assert_eq!(n, 0, "q {q:?}: the frame allocated");
+        assert!(sum >= 400.0 - 1e-6, "q {q:?}: coverage sums to {sum}");
+        assert_eq!(centre, seen, "q {q:?}");
+        checked += 1;
+    }
+    assert!(checked >= 3, "{checked}");
+}

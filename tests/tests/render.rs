@@ -372,3 +372,163 @@ fn hits_follow_the_branch() {
     }
     assert!(checked > 50);
 }
+
+/// Relative difference of two distances.
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(1.0)
+}
+
+/// Checks the hit `got` along the integer direction `v` from `q` on `branch`: a fresh
+/// `Hits` and `hit_along` agree with it, and so does the reference's traced ray when it
+/// follows the same branch. Returns (traced, through a refractive object).
+fn check_hit(
+    n: &str,
+    s: &vcx::SceneRef<'_>,
+    q: QueryPoint,
+    depth: usize,
+    v: (i64, i64),
+    branch: &[ObjectId],
+    got: Option<vcx::render::Hit>,
+) -> (bool, bool) {
+    let dir = (v.0 as f64, v.1 as f64);
+    let fresh = vcx::render::Hits::new().along(s, q, dir, branch);
+    let plain = vcx::render::hit_along(s, q, dir, branch);
+    let g = match (got, fresh, plain) {
+        (Some(g), Some(f), Some(p)) => {
+            assert!(rel(g.first, f.first) < 1e-9, "{n}: {g:?} vs fresh {f:?}");
+            assert!(rel(g.length, f.length) < 1e-9, "{n}: {g:?} vs fresh {f:?}");
+            assert!(
+                (g.facing - f.facing).abs() < 1e-9,
+                "{n}: {g:?} vs fresh {f:?}"
+            );
+            assert!(rel(g.first, p.first) < 1e-9, "{n}: {g:?} vs {p:?}");
+            assert!(rel(g.length, p.length) < 1e-9, "{n}: {g:?} vs {p:?}");
+            assert!((g.facing - p.facing).abs() < 1e-6, "{n}: {g:?} vs {p:?}");
+            g
+        }
+        (None, None, None) => return (false, false),
+        other => panic!("{n}: {other:?}"),
+    };
+    let tr = reference::trace_ray(
+        *s,
+        &Vec2::from_query(q),
+        &Vec2::from_i64(v.0, v.1),
+        RayTreeOptions {
+            depth,
+            round_eyes: true,
+        },
+    )
+    .unwrap();
+    if tr.degenerate || tr.branch != branch {
+        return (false, false);
+    }
+    // `Hit::length` ends where the ray enters the last object of the branch.
+    let stages: Vec<_> = tr
+        .stages
+        .iter()
+        .filter(|st| st.hit.is_some() && !(st.inside && st.level + 1 == branch.len()))
+        .collect();
+    let dist = |st: &reference::Stage| {
+        let (p, o) = (st.hit.as_ref().unwrap().point.to_f64(), st.origin.to_f64());
+        (p.0 - o.0).hypot(p.1 - o.1)
+    };
+    let length: f64 = stages.iter().map(|st| dist(st)).sum();
+    let first = dist(stages[0]);
+    assert!(
+        rel(g.first, first) < 1e-6,
+        "{n}: first {} vs {first}",
+        g.first
+    );
+    assert!(
+        rel(g.length, length) < 1e-4,
+        "{n}: length {} vs {length}",
+        g.length
+    );
+    (true, stages.iter().any(|st| st.inside))
+}
+
+/// `render::centre_hits` (the merged sweep of column centres and boundaries, with hits
+/// through one `Hits`) against `centre_intervals`, `hit_along` and the reference's traced
+/// rays: ray trees of the hall of mirrors and of the mixed scene (mirrors and refractive
+/// objects) from random viewpoints and cameras. A `Hits` fed the columns in a shuffled
+/// order, and one fed rays across each interval, give the same hits as a fresh one.
+#[test]
+fn centre_hits_match_hit_along_and_the_reference() {
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let (mut columns, mut traced, mut refracted) = (0, 0, 0);
+    for (name, depth, points) in [
+        ("hall.json", 5, 2),
+        ("mixed.json", 3, 6),
+        ("grid.json", 0, 2),
+    ] {
+        let scene = example(name);
+        let s = scene.as_ref();
+        let complex = build_by_sweep(&s).unwrap();
+        for _ in 0..scale(points) {
+            let q = random_point(&mut rng, &s);
+            let Ok(tree) = ray_tree(&complex, &s, q, depth) else {
+                continue;
+            };
+            let width = [1, 7, 300][rng.gen_range(0..3)];
+            let camera = random_camera(&mut rng, q, width);
+            let mut centre = vec![0; width];
+            centre_intervals(&camera, &tree, &mut centre);
+            let mut got = vec![None; width];
+            let mut order = Vec::new();
+            vcx::render::centre_hits(&s, &camera, &tree, |c, k, hit| {
+                assert_eq!(k, centre[c], "{name} q {q:?} column {c}: interval");
+                got[c] = hit;
+                order.push(c);
+            });
+            assert_eq!(
+                order,
+                (0..width).collect::<Vec<_>>(),
+                "{name}: column order"
+            );
+            let mut shuffled: Vec<usize> = (0..width).collect();
+            for i in (1..width).rev() {
+                shuffled.swap(i, rng.gen_range(0..=i));
+            }
+            let mut hits = vcx::render::Hits::new();
+            for c in shuffled {
+                let branch = &tree[centre[c]].branch;
+                let v = camera.centre(c).vector;
+                let n = format!("{name} q {q:?} {camera:?} column {c} branch {branch:?}");
+                let again = hits.along(&s, q, camera.centre(c).direction(), branch);
+                check_hit(&n, &s, q, depth, v, branch, again);
+                let (t, r) = check_hit(&n, &s, q, depth, v, branch, got[c]);
+                columns += 1;
+                traced += usize::from(t);
+                refracted += usize::from(r);
+            }
+            // Rays across the middle of each interval narrower than π, in turn.
+            let mut hits = vcx::render::Hits::new();
+            for (i, iv) in tree.iter().enumerate() {
+                let next = tree
+                    .get(i + 1)
+                    .map_or(tree[0].start + core::f64::consts::TAU, |x| x.start);
+                if next - iv.start >= core::f64::consts::PI || next <= iv.start {
+                    continue;
+                }
+                for k in 1..4 {
+                    let a = iv.start + (next - iv.start) * (0.25 + 0.5 * f64::from(k) / 4.0);
+                    let v = ((a.cos() * 1e12) as i64, (a.sin() * 1e12) as i64);
+                    let got = hits.along(&s, q, (v.0 as f64, v.1 as f64), &iv.branch);
+                    let n = format!("{name} q {q:?} interval {i} ray {k} branch {:?}", iv.branch);
+                    let (t, r) = check_hit(&n, &s, q, depth, v, &iv.branch, got);
+                    traced += usize::from(t);
+                    refracted += usize::from(r);
+                }
+            }
+        }
+    }
+    eprintln!("{columns} columns, {traced} traced, {refracted} through a refractive object");
+    assert!(
+        columns > 200 && traced > 500,
+        "{columns} columns, {traced} traced"
+    );
+    assert!(
+        refracted > 20,
+        "{refracted} rays through a refractive object"
+    );
+}

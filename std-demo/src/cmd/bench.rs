@@ -23,7 +23,7 @@ use std::time::Instant;
 
 use serde_json::json;
 use vcx::partition::{build_by_sweep, BuildOptions, Complex, Cylinder, History};
-use vcx::render::{centre_intervals, coverage, hit_along, Camera, Interval};
+use vcx::render::{centre_hits, coverage, Camera, Interval};
 use vcx::{Material, ObjectId, QueryPoint, SubScene};
 
 use super::{write_stdout, Failure};
@@ -425,15 +425,15 @@ pub(crate) fn frame<I: Interval>(
     columns: &mut [usize],
 ) {
     let Some(camera) = camera else { return };
-    centre_intervals(camera, intervals, columns);
     let mut sum = 0.0;
-    for (c, &k) in columns.iter().enumerate() {
-        let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
-        let d = camera.centre(c).direction();
-        if let Some(hit) = hit_along(scene, camera.eye(), d, branch) {
+    centre_hits(scene, camera, intervals, |c, k, hit| {
+        if let Some(slot) = columns.get_mut(c) {
+            *slot = k;
+        }
+        if let Some(hit) = hit {
             sum += hit.length;
         }
-    }
+    });
     coverage(camera, intervals, |p| sum += p.fraction);
     core::hint::black_box(sum);
 }

@@ -26,7 +26,7 @@ use std::path::PathBuf;
 
 use vcx::geom::sos::Angle;
 use vcx::partition::point_in_scene;
-use vcx::render::{coverage, hit_along, Camera, Interval, Piece};
+use vcx::render::{coverage, Camera, Hits, Interval, Piece};
 use vcx::walk::{ray_tree_range, view};
 use vcx::{Material, ObjectId, SceneRef, SubScene};
 use vcx_demo::SceneFile;
@@ -250,7 +250,9 @@ fn extent(scene: &SceneRef<'_>) -> f64 {
 
 /// The colour of a piece's wall (`None`: no wall, the background shows) and the half
 /// height of its band in pixels.
+#[allow(clippy::too_many_arguments)]
 fn shade(
+    hits: &mut Hits,
     scene: &SceneRef<'_>,
     camera: &Camera,
     piece: &Piece,
@@ -261,7 +263,7 @@ fn shade(
 ) -> Option<([f64; 3], f64)> {
     let last = *branch.last()?;
     let mid = (piece.from + piece.to) / 2.0;
-    let hit = hit_along(scene, camera.eye(), camera.direction_at(mid), branch)?;
+    let hit = hits.along(scene, camera.eye(), camera.direction_at(mid), branch)?;
     let material = scene.object(last).map(|o| o.material)?;
     let base = match material {
         Material::Mirror | Material::Refractive { .. } if branch.len() <= depth => SKY,
@@ -296,13 +298,15 @@ pub fn draw(
     let mut pieces: Vec<Piece> = Vec::new();
     coverage(camera, seen, |p| pieces.push(p));
     let horizon = height as f64 / 2.0;
+    // Neighbouring pieces mostly meet the same edges: one `Hits` for the frame.
+    let mut hits = Hits::new();
     let mut k = 0;
     for c in 0..w {
         col.iter_mut().for_each(|p| *p = [0.0; 3]);
         while let Some(p) = pieces.get(k).filter(|p| p.column == c) {
             k += 1;
             let branch = seen.get(p.interval).map_or(&[][..], |s| &s.branch);
-            let wall = shade(&scene, camera, p, branch, depth, ext, height);
+            let wall = shade(&mut hits, &scene, camera, p, branch, depth, ext, height);
             for (row, px) in col.iter_mut().enumerate() {
                 let bg = if (row as f64) < horizon { SKY } else { FLOOR };
                 // Share of the pixel row [row, row + 1] inside the band.
