@@ -52,10 +52,12 @@ impl RankedPoint {
 }
 
 /// A point of a perturbed predicate, on the query grid, with its rank (`None`: constant).
+/// Stored as `i64` (query coordinates and constants are `i64`) to keep an [`Angle`] small;
+/// every predicate widens to `i128` before subtracting.
 #[derive(Clone, Copy, Debug)]
 struct Sym {
-    x: i128,
-    y: i128,
+    x: i64,
+    y: i64,
     rank: Option<u32>,
 }
 
@@ -69,24 +71,39 @@ impl Sym {
     fn vertex(v: RankedPoint) -> Sym {
         let q = v.point.to_query();
         Sym {
-            x: q.x() as i128,
-            y: q.y() as i128,
+            x: q.x(),
+            y: q.y(),
             rank: Some(v.rank),
         }
     }
 
     fn query(q: QueryPoint) -> Sym {
         Sym {
-            x: q.x() as i128,
-            y: q.y() as i128,
+            x: q.x(),
+            y: q.y(),
             rank: Some(0),
         }
     }
 
+    /// `self − other`, exact in `i128`.
+    #[inline]
+    fn minus(self, other: Sym) -> (i128, i128) {
+        (
+            i128::from(self.x) - i128::from(other.x),
+            i128::from(self.y) - i128::from(other.y),
+        )
+    }
+
+    /// The same point: same coordinates and rank.
+    #[inline]
+    fn same(self, other: Sym) -> bool {
+        self.x == other.x && self.y == other.y && self.rank == other.rank
+    }
+
     fn constant(d: Direction) -> Sym {
         Sym {
-            x: d.x as i128,
-            y: d.y as i128,
+            x: d.x,
+            y: d.y,
             rank: None,
         }
     }
@@ -118,20 +135,63 @@ fn vars(a: Sym, b: Sym, c: Sym, d: Sym) -> ([Var; 4], usize) {
     (out, n)
 }
 
+/// Exact `cross(a − b, c − d)`. Where the differences fit `i64` (always, for coordinates
+/// in range) the products are single widening multiplications; the difference of two
+/// products of `i64` values is below 2¹²⁷ in magnitude, so exact.
+#[cfg(not(feature = "naive-f64"))]
+#[inline]
+fn det(a: Sym, b: Sym, c: Sym, d: Sym) -> i128 {
+    match (
+        a.x.checked_sub(b.x),
+        a.y.checked_sub(b.y),
+        c.x.checked_sub(d.x),
+        c.y.checked_sub(d.y),
+    ) {
+        (Some(ux), Some(uy), Some(vx), Some(vy)) => {
+            i128::from(ux) * i128::from(vy) - i128::from(uy) * i128::from(vx)
+        }
+        _ => {
+            let ((ux, uy), (vx, vy)) = (a.minus(b), c.minus(d));
+            ux * vy - uy * vx
+        }
+    }
+}
+
 /// Perturbed sign of `cross(a − b, c − d)`.
 ///
 /// Bit budget: coordinates on the query grid (≤ 2⁵², or constants ≤ 2⁵²), differences
 /// ≤ 2⁵³, products ≤ 2¹⁰⁶: exact in `i128`.
+#[inline]
 fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
-    let (ux, uy) = (a.x - b.x, a.y - b.y);
-    let (vx, vy) = (c.x - d.x, c.y - d.y);
     #[cfg(feature = "naive-f64")]
-    let exact = super::naive::cross(ux, uy, vx, vy);
+    let exact = {
+        let ((ux, uy), (vx, vy)) = (a.minus(b), c.minus(d));
+        super::naive::cross(ux, uy, vx, vy)
+    };
     #[cfg(not(feature = "naive-f64"))]
-    let exact = Sign::of_i128(ux * vy - uy * vx);
+    let exact = Sign::of_i128(det(a, b, c, d));
     if exact != Sign::Zero {
         return exact;
     }
+    cross_tie(a, b, c, d)
+}
+
+/// [`cross`] where the exact value is zero: the first non-zero coefficient of the
+/// perturbation (rare: kept out of line so the exact path stays small).
+#[cold]
+#[inline(never)]
+fn cross_tie(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
+    // The same pair twice (a direction compared with itself, as a walk does with the
+    // tangent it just crossed): the polynomial vanishes identically.
+    if a.same(c) && b.same(d) {
+        return Sign::Zero;
+    }
+    first_coefficient(a, b, c, d)
+}
+
+/// The sign of the first non-zero coefficient of the perturbed `cross(a − b, c − d)`.
+fn first_coefficient(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
+    let ((ux, uy), (vx, vy)) = (a.minus(b), c.minus(d));
     let (vars, n) = vars(a, b, c, d);
     // Variable k is (point k / 2, axis k % 2), in significance order. Monomial order: the
     // single variable k, then the pairs (j, k) for j < k (binary counting order).
@@ -170,9 +230,15 @@ fn cross(a: Sym, b: Sym, c: Sym, d: Sym) -> Sign {
 /// Perturbed sign of `dot(w, a − b)` for a constant vector `w`.
 fn dot(w: Direction, a: Sym, b: Sym) -> Sign {
     #[cfg(feature = "naive-f64")]
-    let exact = super::naive::dot(w.x as i128, w.y as i128, a.x - b.x, a.y - b.y);
+    let exact = {
+        let (ex, ey) = a.minus(b);
+        super::naive::dot(w.x as i128, w.y as i128, ex, ey)
+    };
     #[cfg(not(feature = "naive-f64"))]
-    let exact = Sign::of_i128(w.x as i128 * (a.x - b.x) + w.y as i128 * (a.y - b.y));
+    let exact = {
+        let (ex, ey) = a.minus(b);
+        Sign::of_i128(w.x as i128 * ex + w.y as i128 * ey)
+    };
     if exact != Sign::Zero {
         return exact;
     }
@@ -257,13 +323,35 @@ pub fn object_ahead(q: QueryPoint, d: Direction, a: RankedPoint, b: RankedPoint)
 }
 
 /// Whether the perturbed vector `head − tail` lies in the upper half-plane `[0, π)`.
+#[cfg(feature = "naive-f64")]
 fn upper(head: Sym, tail: Sym) -> bool {
     match dot(Direction { x: 0, y: 1 }, head, tail) {
-        Sign::Zero => upper_half(head.x - tail.x, 0),
+        Sign::Zero => upper_half(head.minus(tail).0, 0),
         s => s == Sign::Positive,
     }
 }
 
+/// Whether the perturbed vector `head − tail` lies in the upper half-plane `[0, π)`: the
+/// sign of `dot((0, 1), head − tail)` as [`dot`] decides it, without its general fallback.
+/// Where the y difference is zero, the first non-zero coefficient in rank order is that of
+/// the y-perturbation of the lower-ranked point (x-perturbations have coefficient 0): +1 for
+/// the head, −1 for the tail. Neither perturbed, or the same point: the exact test.
+#[cfg(not(feature = "naive-f64"))]
+#[inline]
+fn upper(head: Sym, tail: Sym) -> bool {
+    match head.y.cmp(&tail.y) {
+        Ordering::Greater => true,
+        Ordering::Less => false,
+        Ordering::Equal => match (head.rank, tail.rank) {
+            (Some(h), Some(t)) if h != t => h < t,
+            (Some(_), None) => true,
+            (None, Some(_)) => false,
+            _ => upper_half(head.minus(tail).0, 0),
+        },
+    }
+}
+
+#[inline]
 fn direction_cmp_sym(p1: Sym, q1: Sym, p2: Sym, q2: Sym) -> Ordering {
     let (h1, h2) = (upper(q1, p1), upper(q2, p2));
     if h1 != h2 {
@@ -368,8 +456,8 @@ impl Angle {
     /// exactly the same direction. For output decisions such as dropping events of zero
     /// angular width; construction and walking use [`Angle::cmp_angle`].
     pub fn cmp_exact(&self, other: &Angle) -> Ordering {
-        let (ux, uy) = (self.head.x - self.tail.x, self.head.y - self.tail.y);
-        let (vx, vy) = (other.head.x - other.tail.x, other.head.y - other.tail.y);
+        let (ux, uy) = self.head.minus(self.tail);
+        let (vx, vy) = other.head.minus(other.tail);
         let (hu, hv) = (upper_half(ux, uy), upper_half(vx, vy));
         if hu != hv {
             return if hu {
@@ -386,15 +474,13 @@ impl Angle {
 
     /// The direction vector (head − tail) on the query grid, exact.
     pub fn vector(&self) -> (i128, i128) {
-        (self.head.x - self.tail.x, self.head.y - self.tail.y)
+        self.head.minus(self.tail)
     }
 
     /// The angle in radians in `[0, 2π)`, for output only.
     pub fn radians(&self) -> f64 {
-        let (x, y) = (
-            (self.head.x - self.tail.x) as f64,
-            (self.head.y - self.tail.y) as f64,
-        );
+        let (x, y) = self.head.minus(self.tail);
+        let (x, y) = (x as f64, y as f64);
         let a = libm::atan2(y, x);
         if a < 0.0 {
             a + 2.0 * core::f64::consts::PI
@@ -406,6 +492,24 @@ impl Angle {
     /// Order on the circle by angle in `[0, 2π)` from +x.
     pub fn cmp_angle(&self, other: &Angle) -> Ordering {
         direction_cmp_sym(self.tail, self.head, other.tail, other.head)
+    }
+
+    /// This angle with what [`Angle::cmp_angle`] computes of it on every call, for an angle
+    /// compared many times (a walk's current angle and candidate exits).
+    #[inline]
+    pub(crate) fn keyed(self) -> KeyedAngle {
+        let vector = match (
+            self.head.x.checked_sub(self.tail.x),
+            self.head.y.checked_sub(self.tail.y),
+        ) {
+            (Some(x), Some(y)) => Some((x, y)),
+            _ => None,
+        };
+        KeyedAngle {
+            angle: self,
+            upper: upper(self.head, self.tail),
+            vector,
+        }
     }
 
     /// Offset order of the lines of direction θ through the vertices `p` and `r`:
@@ -451,12 +555,53 @@ impl Angle {
     /// comes after `p` (sign of `dot(d, r − p)`). Exact only: for the perturbed order of
     /// points *on one line* use [`object_ahead`]-style predicates.
     pub fn along_exact(&self, p: RankedPoint, r: RankedPoint) -> Sign {
-        let (dx, dy) = (self.head.x - self.tail.x, self.head.y - self.tail.y);
-        let (a, b) = (Sym::vertex(p), Sym::vertex(r));
+        let (dx, dy) = self.head.minus(self.tail);
+        let (wx, wy) = Sym::vertex(r).minus(Sym::vertex(p));
         #[cfg(feature = "naive-f64")]
-        return super::naive::dot(dx, dy, b.x - a.x, b.y - a.y);
+        return super::naive::dot(dx, dy, wx, wy);
         #[cfg(not(feature = "naive-f64"))]
-        Sign::of_i128(dx * (b.x - a.x) + dy * (b.y - a.y))
+        Sign::of_i128(dx * wx + dy * wy)
+    }
+}
+
+/// An [`Angle`] with its half-plane and its exact direction vector (when it fits `i64`,
+/// as it always does for coordinates in range): [`KeyedAngle::cmp`] is
+/// [`Angle::cmp_angle`] with those precomputed, the perturbation consulted only where the
+/// cross product is exactly zero.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct KeyedAngle {
+    /// The angle.
+    pub(crate) angle: Angle,
+    upper: bool,
+    vector: Option<(i64, i64)>,
+}
+
+impl KeyedAngle {
+    /// [`Angle::cmp_angle`]`(&self.angle, &other.angle)`.
+    #[inline]
+    pub(crate) fn cmp(&self, other: &KeyedAngle) -> Ordering {
+        if self.upper != other.upper {
+            return if self.upper {
+                Ordering::Less
+            } else {
+                Ordering::Greater
+            };
+        }
+        if let (Some((ux, uy)), Some((vx, vy))) = (self.vector, other.vector) {
+            // Products of `i64` values: exact in `i128` (see `det`).
+            #[cfg(not(feature = "naive-f64"))]
+            let s =
+                Sign::of_i128(i128::from(ux) * i128::from(vy) - i128::from(uy) * i128::from(vx));
+            // As `cross` evaluates it in this build.
+            #[cfg(feature = "naive-f64")]
+            let s = super::naive::cross(ux.into(), uy.into(), vx.into(), vy.into());
+            match s {
+                Sign::Positive => return Ordering::Less,
+                Sign::Negative => return Ordering::Greater,
+                Sign::Zero => {}
+            }
+        }
+        self.angle.cmp_angle(&other.angle)
     }
 }
 
@@ -497,6 +642,47 @@ mod tests {
         let (c, d) = (v(0, 0, 0), v(0, 10, 1));
         let q = Point::from_raw(0, 5).unwrap().to_query();
         assert_eq!(orient_query(c, d, q), Sign::Negative); // q + ε is right of upward c→d
+    }
+
+    /// Points with ties everywhere: coordinates in {−1, 0, 1}, as vertices of several
+    /// ranks, the query point (rank 0) and constants.
+    fn tie_points() -> impl Iterator<Item = Sym> {
+        let ranks = [None, Some(0), Some(1), Some(2), Some(5)];
+        (-1..=1).flat_map(move |x| {
+            (-1..=1).flat_map(move |y| ranks.into_iter().map(move |rank| Sym { x, y, rank }))
+        })
+    }
+
+    /// The half-plane test through the general perturbed `dot` (the definition).
+    fn upper_by_dot(head: Sym, tail: Sym) -> bool {
+        match dot(Direction { x: 0, y: 1 }, head, tail) {
+            Sign::Zero => upper_half(head.minus(tail).0, 0),
+            s => s == Sign::Positive,
+        }
+    }
+
+    #[test]
+    fn fast_paths_agree_with_the_general_perturbation() {
+        let angles =
+            || tie_points().flat_map(|h| tie_points().map(move |t| Angle { head: h, tail: t }));
+        for a in angles() {
+            let (h, t) = (a.head, a.tail);
+            assert_eq!(upper(h, t), upper_by_dot(h, t), "{h:?} {t:?}");
+            // The same pair twice vanishes identically (the shortcut of `cross_tie`).
+            assert_eq!(first_coefficient(h, t, h, t), Sign::Zero, "{h:?} {t:?}");
+        }
+        for a in angles().step_by(7) {
+            for b in angles().step_by(3) {
+                let (ka, kb) = (a.keyed(), b.keyed());
+                assert_eq!(ka.cmp(&kb), a.cmp_angle(&b), "{a:?} {b:?}");
+                let ((ux, uy), (vx, vy)) = (a.head.minus(a.tail), b.head.minus(b.tail));
+                let general = match Sign::of_i128(ux * vy - uy * vx) {
+                    Sign::Zero => first_coefficient(a.head, a.tail, b.head, b.tail),
+                    s => s,
+                };
+                assert_eq!(cross(a.head, a.tail, b.head, b.tail), general);
+            }
+        }
     }
 
     #[test]

@@ -414,6 +414,14 @@ fn wall_rank(w: Wall) -> usize {
     }
 }
 
+/// The position of a right wall in θ order: by vertex, θ = 0 (here 2π) last.
+fn right_rank(w: Wall) -> usize {
+    match w {
+        Wall::Zero => usize::MAX,
+        Wall::Vertex(v) => v.index(),
+    }
+}
+
 /// The layers on side `side` of `chain`: two (before and after the object) where the
 /// object is crossed, one otherwise.
 fn far_layers(chain: Chain, side: Side) -> heapless::Vec<Layer, 2> {
@@ -433,9 +441,9 @@ fn far_layers(chain: Chain, side: Side) -> heapless::Vec<Layer, 2> {
 
 impl<S: Storage> super::Complex<S> {
     /// Leaving cylinder `from` across its bottom (`side` = `Below`) or top (`Above`) arc at
-    /// `angle` (within `from`'s θ-range), the cylinder entered in `layer`. Looks near the
-    /// position of `from` along the chain instead of searching the whole chain: the
-    /// cylinders on both sides of a chain are sorted by θ, and the one entered overlaps
+    /// `angle` (strictly within `from`'s θ-range), the cylinder entered in `layer`. Looks
+    /// near the position of `from` along the chain instead of searching the whole chain:
+    /// the cylinders on both sides of a chain are sorted by θ, and the one entered overlaps
     /// `from`, so the scan is short.
     pub fn across_from(
         &self,
@@ -454,11 +462,16 @@ impl<S: Storage> super::Complex<S> {
         let borders = self.borders_ref();
         let list = borders.tiling(chain, side, layer)?;
         let first = *borders.start.get(from.index())?.get(arc)?.get(l)? as usize;
+        // `angle` lies before `c`'s right wall, so before every wall at or after it: walls
+        // are ordered by vertex index (vertices are sorted by θ), and such a far cylinder
+        // is accepted without reading its wall's angle.
+        let c_right = right_rank(c.right);
         // The far cylinders overlapping `from` follow each other from `first`.
         for id in list.iter().skip(first) {
             let f = self.cylinder(*id)?;
             let before_right = match f.right {
                 Wall::Zero => true,
+                w if right_rank(w) >= c_right => true,
                 w => angle.cmp_angle(&self.wall_angle(scene, w)?) == Ordering::Less,
             };
             if before_right {

@@ -84,11 +84,16 @@ pub use tree::{ray_tree, ray_tree_range, TreeInterval};
 pub use view::{view, view_range};
 pub use view::{view_capacity, view_into, view_range_into, ViewInterval};
 
-use crate::geom::sos::Angle;
+use crate::geom::sos::{Angle, KeyedAngle};
 use crate::geom::QueryPoint;
 use crate::line_space::{ranked, Bound, Chain};
 use crate::partition::{Complex, CylinderId, Layer, Location, Side, Storage, Wall};
 use crate::scene::{ObjectId, SceneRef};
+
+/// Entries of a walk's cache of tangents from the eye (round robin): eight hold the
+/// objects a grid view's consecutive cylinders share (four missed often enough to cost
+/// about 7 % of a view; sixteen cost more to search than they save).
+const TANGENT_CACHE: usize = 8;
 
 /// How a walk follows a trace across primary walls.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -264,14 +269,14 @@ impl<S: Storage> Complex<S> {
         // chain) vertex, so a cylinder whose bottom tangent lies above `q` or whose top
         // tangent lies below it (in y, from the bounding boxes: exact integers) cannot hold
         // `q`'s line; the exact, perturbed test runs on the few that remain.
-        let qy = i128::from(q.y());
+        let qy = q.y();
         let height = |chain: &Chain| {
             let (lo, hi) = scene.object(chain.object)?.bbox();
             let p = match chain.bound {
                 Bound::Lower => lo,
                 Bound::Upper => hi,
             };
-            Some(i128::from(p.to_query().y()))
+            Some(p.to_query().y())
         };
         let zero = self
             .cylinders()
@@ -314,21 +319,23 @@ impl<S: Storage> Complex<S> {
         step: &mut impl FnMut(&Step),
     ) -> Result<(), WalkError> {
         use core::cmp::Ordering;
-        let mut theta = from;
+        // Angles compared more than once carry their half-plane and vector (`KeyedAngle`).
+        let mut theta = from.keyed();
         let mut lap = 0u8;
-        let before = |a: (u8, &Angle), b: (u8, &Angle)| {
-            a.0 < b.0 || (a.0 == b.0 && a.1.cmp_angle(b.1) == Ordering::Less)
+        let before = |a: (u8, &KeyedAngle), b: (u8, &KeyedAngle)| {
+            a.0 < b.0 || (a.0 == b.0 && a.1.cmp(b.1) == Ordering::Less)
         };
+        let end = end.map(|e| (e.lap, e.angle.keyed()));
         // The tangents from `q` to the last few chain objects: consecutive cylinders of a
         // trace mostly share a chain, and the tangents depend only on the object.
-        let mut cache = [(None::<ObjectId>, [(0usize, Bound::Lower); 2], 0usize); 4];
+        let mut cache = [(None::<ObjectId>, [(0usize, Bound::Lower); 2], 0usize); TANGENT_CACHE];
         let mut next_slot = 0;
         let mut tangents = |object: ObjectId| {
             if let Some(&(_, t, n)) = cache.iter().find(|e| e.0 == Some(object)) {
                 return (t, n);
             }
             let (t, n) = crate::line_space::tangents_from(scene, object, q);
-            if let Some(slot) = cache.get_mut(next_slot % 4) {
+            if let Some(slot) = cache.get_mut(next_slot % TANGENT_CACHE) {
                 *slot = (Some(object), t, n);
             }
             next_slot += 1;
@@ -337,10 +344,10 @@ impl<S: Storage> Complex<S> {
         for _ in 0..4 * self.cylinders().len() + 4 {
             let c = self.cylinder(cur).ok_or(WalkError::Corrupt)?;
             // The first exit after θ: the right wall, or a crossing of the bottom or top chain.
-            let mut best: Option<(u8, Angle, Option<ChainExit>)> = match c.right {
+            let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
                 // The permanent wall ends a full-circle walk; a range walk crosses it.
-                Wall::Zero => end.map(|_| (lap + 1, Angle::ZERO, None)),
-                w => self.wall_angle(scene, w).map(|a| (lap, a, None)),
+                Wall::Zero => end.map(|_| (lap + 1, Angle::ZERO.keyed(), None)),
+                w => self.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
             };
             for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
                 let Some(chain) = chain else { continue };
@@ -352,11 +359,11 @@ impl<S: Storage> Complex<S> {
                     let forward = Angle::from_query(q, ranked(scene, h));
                     // The line q → h lies on `bound`; its reverse on the other chain.
                     let (a, ahead) = if bound == chain.bound {
-                        (forward, true)
+                        (forward.keyed(), true)
                     } else {
-                        (forward.reversed(), false)
+                        (forward.reversed().keyed(), false)
                     };
-                    let later = a.cmp_angle(&theta) == Ordering::Greater;
+                    let later = a.cmp(&theta) == Ordering::Greater;
                     if later
                         && best
                             .as_ref()
@@ -381,8 +388,8 @@ impl<S: Storage> Complex<S> {
                     Some(_) => Err(WalkError::Corrupt),
                 };
             };
-            if let Some(e) = &end {
-                if !before((l, &angle), (e.lap, &e.angle)) {
+            if let Some((e_lap, e_angle)) = &end {
+                if !before((l, &angle), (*e_lap, e_angle)) {
                     return Ok(());
                 }
             }
@@ -411,7 +418,7 @@ impl<S: Storage> Complex<S> {
                     // The entered cylinder overlaps the one left: scan the far side from
                     // there (usually a step or two) instead of bisecting the tiling.
                     let next = self
-                        .across_from(scene, cur, side, layer, &theta)
+                        .across_from(scene, cur, side, layer, &theta.angle)
                         .ok_or(WalkError::Corrupt)?;
                     if let Anchor::Floor(m) = anchor {
                         if self.cylinder(next).and_then(|n| n.floor) != Some(m) {
@@ -423,7 +430,7 @@ impl<S: Storage> Complex<S> {
             };
             let (vertex, ahead) = exit.map_or((None, false), |e| (Some(e.vertex), e.ahead));
             step(&Step {
-                angle: theta,
+                angle: theta.angle,
                 vertex,
                 ahead,
                 cylinder: cur,

@@ -232,15 +232,17 @@ fn sweep<S: Storage>(
     let mut seen: Option<ObjectId> = None;
     let mut result: Result<(), WalkError> = Ok(());
     complex.walk_trace(scene, q, |s| {
-        let ceiling = complex.ceiling(s.cylinder);
         if start_object.is_none() {
+            let ceiling = complex.ceiling(s.cylinder);
             start_object = Some(ceiling);
             seen = ceiling;
             return;
         }
+        // Only a tangent vertex ahead of `q` can change the view.
         let (Some(v), true) = (s.vertex, s.ahead) else {
             return;
         };
+        let ceiling = complex.ceiling(s.cylinder);
         let event = Cluster {
             angle: s.angle,
             vertex: v,
