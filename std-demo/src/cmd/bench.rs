@@ -12,7 +12,8 @@
 //!   point timed as the best of R repetitions), views per second, mean events of the
 //!   primary walk (cylinders entered) and intervals per view. One JSON object. With
 //!   `--fov DEG [--heading DEG] [--width W]` each measurement is a frame of W columns: the
-//!   same sweep plus per-column hits (`render::centre_intervals`, `render::hit_along`) and
+//!   same sweep plus per-column hits (`render::centre_hits`: each column's centre interval
+//!   and the distance along its branch, one `render::Hits` for the frame) and
 //!   exact per-column coverage (`render::coverage`); adds `us_per_frame`.
 //!
 //! The measurements ([`time_build`], [`measure_views`]) are also those of the sections of

@@ -392,8 +392,8 @@ pub(super) fn frames(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
     Ok(Output {
         caption: format!(
             "Per scene the full 360° sweep (view or ray tree) and a frame: the sweep (a ray tree \
-             over the field of view only), then per-column hits (`render::centre_intervals` and `render::hit_along` for each \
-             column's centre) and the exact coverage of every column (`render::coverage`), \
+             over the field of view only), then per-column hits (`render::centre_hits`: each column's \
+             centre interval and the distance along its branch) and the exact coverage of every column (`render::coverage`), \
              {w} columns, {f}° field of view, heading 0; {r} random free viewpoints (seed \
              {SEED}), best of {p} runs each, median; the two columns measured back to back. \
              Alone: `vcx bench views SCENE [--depth D] --random {r} --repeat {p}` and the same \
