@@ -944,42 +944,69 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The start cylinder found through the per-chain tilings: the cylinders with floor `m`
-    /// at `from` (perturbed) stack up from `m`'s lower chain; climb until the top chain lies
-    /// above the eye's line. O(log n) per tiling lookup plus the height of the stack.
+    /// at `from` (perturbed) stack up from `m`'s lower chain to its upper one; climb from
+    /// the nearer end until the next chain lies beyond the eye's line. O(log n) per tiling lookup plus the height of the stack.
     /// `None` where something lies exactly on the opening ray and the perturbed angle and
     /// the turned line disagree (the caller then scans).
     fn stack_floor(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> Option<CylinderId> {
-        let lower = Chain {
-            object: m,
-            bound: Bound::Lower,
+        // Climb from the end of `m`'s sheet nearer to the eye's line: an `f64` estimate
+        // only picks the end, either climb is exact.
+        let up = self.nearer_lower(eye, m, from);
+        let (start, side, inward) = if up {
+            (Bound::Lower, Side::Above, Sign::Negative)
+        } else {
+            (Bound::Upper, Side::Below, Sign::Positive)
         };
-        if self.chain_after(eye, from, lower, true) != Sign::Negative {
+        let first = Chain {
+            object: m,
+            bound: start,
+        };
+        if self.chain_after(eye, from, first, true) != inward {
             return None;
         }
         // The tilings are searched at the perturbed angle, on the turned line's lap.
         let probe = if wraps(from) { Angle::ZERO } else { *from };
         let mut id = self
             .complex
-            .across(self.scene, lower, Side::Above, Layer::After, &probe)?;
+            .across(self.scene, first, side, Layer::After, &probe)?;
         for _ in 0..self.complex.cylinders().len() {
             let c = self.complex.cylinder(id)?;
             if c.floor != Some(m) {
                 return None;
             }
-            let top = match c.top {
-                Some(t) if self.chain_after(eye, from, t, true) != Sign::Positive => t,
+            let next = match if up { c.top } else { c.bottom } {
+                Some(t) if self.chain_after(eye, from, t, true) != inward.flip() => t,
                 _ => return self.contains_after(eye, from, c, true).then_some(id),
             };
-            // Above a lower chain its object is crossed: the layer ending there.
-            let layer = match top.bound {
-                Bound::Lower => Layer::Before,
-                Bound::Upper => Layer::Around,
+            // Beyond a chain whose object lies on the far side (above a lower chain, below
+            // an upper one) that object is crossed: the layer ending there.
+            let layer = if next.bound == start {
+                Layer::Before
+            } else {
+                Layer::Around
             };
-            id = self
-                .complex
-                .across(self.scene, top, Side::Above, layer, &probe)?;
+            id = self.complex.across(self.scene, next, side, layer, &probe)?;
         }
         None
+    }
+
+    /// Whether the eye's line at `from` lies nearer (in `f64`) to `m`'s lower chain than to
+    /// its upper one.
+    fn nearer_lower(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> bool {
+        let d = from.vector();
+        let d = (d.0 as f64, d.1 as f64);
+        let Some(obj) = self.scene.object(m) else {
+            return true;
+        };
+        let (lo, hi) = (obj.first_vertex()..obj.first_vertex() + obj.len())
+            .map(|v| {
+                let w = diff(self.qpoint(v), eye);
+                d.0 * w.1 as f64 - d.1 * w.0 as f64
+            })
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), u| {
+                (lo.min(u), hi.max(u))
+            });
+        -lo <= hi
     }
 
     /// [`Tree::stack_floor`] by a scan over the cylinders: O(cylinders), for the
