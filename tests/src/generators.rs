@@ -1512,6 +1512,25 @@ pub fn compare_tree_ranges(
         let at = |e: String| format!("q {q:?} depth {depth} range {from:?}..{to:?}: {e}");
         let got =
             vcx::walk::ray_tree_range(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
+        // What a frame draws: the same intervals, without vertices.
+        let frame =
+            vcx::walk::frame_tree(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
+        let same_start = |a: &TreeInterval, b: &TreeInterval| match (a.exact_start, b.exact_start) {
+            (Some(x), Some(y)) => x.cmp_exact(&y).is_eq(),
+            (x, y) => x.is_none() && y.is_none(),
+        };
+        if frame.len() != got.len()
+            || frame.iter().zip(&got).any(|(a, b)| {
+                a.branch != b.branch
+                    || a.start_vertex.is_some()
+                    || a.start.to_bits() != b.start.to_bits()
+                    || !same_start(a, b)
+            })
+        {
+            return Err(at(format!(
+                "\n frame_tree {frame:?}\n ray_tree_range {got:?}"
+            )));
+        }
         let fa = Angle::constant(from);
         if !got
             .first()

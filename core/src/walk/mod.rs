@@ -79,7 +79,7 @@ mod tree;
 mod view;
 
 #[cfg(feature = "alloc")]
-pub use tree::{ray_tree, ray_tree_range, TreeInterval};
+pub use tree::{frame_tree, ray_tree, ray_tree_range, TreeInterval};
 #[cfg(feature = "alloc")]
 pub use view::{view, view_range};
 pub use view::{view_capacity, view_into, view_range_into, ViewInterval};

@@ -207,7 +207,7 @@ pub fn ray_tree<S: Storage>(
     q: QueryPoint,
     depth: usize,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    sweep(complex, scene, q, depth, None)
+    sweep(complex, scene, q, depth, None, true)
 }
 
 /// The ray trees restricted to the primary directions counter-clockwise from `from` to
@@ -231,7 +231,21 @@ pub fn ray_tree_range<S: Storage>(
     from: Direction,
     to: Direction,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    sweep(complex, scene, q, depth, Some((from, to)))
+    sweep(complex, scene, q, depth, Some((from, to)), true)
+}
+
+/// The ray tree over a field of view as a frame draws it: the intervals of
+/// [`ray_tree_range`] without their boundary vertices (`start_vertex` is always `None`),
+/// which spares the vertex rule's mapping of every boundary back through its hops.
+pub fn frame_tree<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    depth: usize,
+    from: Direction,
+    to: Direction,
+) -> Result<Vec<TreeInterval>, WalkError> {
+    sweep(complex, scene, q, depth, Some((from, to)), false)
 }
 
 fn sweep<S: Storage>(
@@ -240,6 +254,7 @@ fn sweep<S: Storage>(
     q: QueryPoint,
     depth: usize,
     range: Option<(Direction, Direction)>,
+    vertices: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
     let mut tree = Tree {
         complex,
@@ -270,7 +285,7 @@ fn sweep<S: Storage>(
     let (context, inside) = tree.clip(q, pieces, f, t);
     // A boundary exactly on `from` is resolved against the last leaf before it.
     let mut before = Vec::new();
-    if let Some(p) = context {
+    if let Some(p) = context.filter(|_| vertices) {
         tree.piece(q, depth, p, &mut before)?;
     }
     for p in inside {
@@ -283,7 +298,7 @@ fn sweep<S: Storage>(
             // Inside the range, equal neighbours merge; the first interval starts at `from`
             // even where the full tree has no boundary.
             Some(left) if *left == leaf.branch && i > 0 => continue,
-            Some(left) if *left != leaf.branch => {
+            Some(left) if *left != leaf.branch && vertices => {
                 tree.resolve(&leaf.boundary.rule, left, &leaf.branch)
             }
             _ => None,

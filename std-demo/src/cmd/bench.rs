@@ -374,12 +374,10 @@ pub(crate) fn measure_views(
                 let t = match &camera {
                     Some(cam) => {
                         let (from, to) = cam.range();
-                        vcx::walk::ray_tree_range(&complex, &scene, q, depth, from, to).map(
-                            |mut t| {
-                                vcx::render::angle_order(&mut t);
-                                t
-                            },
-                        )
+                        vcx::walk::frame_tree(&complex, &scene, q, depth, from, to).map(|mut t| {
+                            vcx::render::angle_order(&mut t);
+                            t
+                        })
                     }
                     None => vcx::walk::ray_tree(&complex, &scene, q, depth),
                 }

@@ -7,7 +7,7 @@
 //! rendered three ways, all in the same run, complexes and acceleration structures built
 //! beforehand:
 //! * **complex**: the ray tree to depth D over the frame's field of view
-//!   ([`vcx::walk::ray_tree_range`], over the complex of the whole scene) and its exact
+//!   ([`vcx::walk::frame_tree`], over the complex of the whole scene) and its exact
 //!   per-column coverage ([`CoverageTable::exact`]) — the truth,
 //!   error 0 by construction (checked against the exact reference in `tests/tests/render.rs`);
 //! * **quadtree** and **bvh** (`vcx-baselines`): `s` stratified rays per column for each
@@ -35,7 +35,7 @@ use std::time::Instant;
 use serde_json::{json, Value};
 use vcx::partition::{build_by_sweep, point_in_scene};
 use vcx::render::{angle_order, Camera, CoverageTable};
-use vcx::walk::ray_tree_range;
+use vcx::walk::frame_tree;
 use vcx::{QueryPoint, SceneRef};
 use vcx_baselines::{render, render_columns, BvhCaster, Caster, Prepared, Quadtree};
 
@@ -413,7 +413,7 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
     for cam in &cameras {
         let (from, to) = cam.range();
         let r = timed(&mut times, a.repeat, || {
-            ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut tree| {
+            frame_tree(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut tree| {
                 angle_order(&mut tree);
                 (CoverageTable::exact(cam, &tree), tree.len())
             })
@@ -423,7 +423,7 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
             if let Ok(tree) = timed(&mut tree_times, a.repeat, || {
-                ray_tree_range(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut t| {
+                frame_tree(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut t| {
                     angle_order(&mut t);
                     t
                 })

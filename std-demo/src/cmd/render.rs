@@ -27,7 +27,7 @@ use std::path::PathBuf;
 use vcx::geom::sos::Angle;
 use vcx::partition::point_in_scene;
 use vcx::render::{coverage, Camera, Hits, Interval, Piece};
-use vcx::walk::{ray_tree_range, view};
+use vcx::walk::{frame_tree, view};
 use vcx::{Material, ObjectId, SceneRef, SubScene};
 use vcx_demo::SceneFile;
 
@@ -147,7 +147,7 @@ pub fn intervals(
             .collect())
     } else {
         let (from, to) = camera.range();
-        let mut tree = ray_tree_range(complex, scene, q, depth, from, to)?;
+        let mut tree = frame_tree(complex, scene, q, depth, from, to)?;
         vcx::render::angle_order(&mut tree);
         Ok(tree
             .into_iter()

@@ -250,7 +250,7 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
              hold no boundary, and one ray per column gets every such column exactly right, \
              so the casters' error at one sample is already small; the complex's exactness \
              pays at stricter errors. The complex follows only the primary pieces inside the \
-             frame's field of view (`walk::ray_tree_range`), but its primary walk is still \
+             frame's field of view (`walk::frame_tree`), but its primary walk is still \
              the full circle, and it builds the tree by recursion per interval, allocating \
              leaves and branches (the lock-step walk is later work).",
             notes.join("\n"),

@@ -369,7 +369,8 @@ pub(super) fn frames(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         .map(|e| format!("{:.0} µs", e.2))
         .collect();
     let mut notes = format!(
-        "A ray-tree frame walks the tree over the field of view only (`walk::ray_tree_range`; \
+        "A ray-tree frame walks the tree over the field of view only (`walk::frame_tree`: \
+         `walk::ray_tree_range` without the boundary vertices, which a frame does not draw; \
          the primary walk is still the full circle): frame / full-circle tree = {} for the \
          depth-5 scenes, per-column work included. A view frame walks the full view and adds \
          the frame's own work ({} columns: one branch followed per column in `f64`, and the \
