@@ -4,35 +4,13 @@
 //! the JSON scene, and corrupt files — truncated, a bit flipped, an unknown version, not a
 //! complex at all — giving exit status 2 and one `error:` line naming the byte offset.
 
-use core::sync::atomic::{AtomicUsize, Ordering};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::Value;
 
-const VCX: &str = env!("CARGO_BIN_EXE_vcx");
-
-fn temp_path(name: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let dir = std::env::temp_dir().join(format!("vcx-cli-format-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    dir.join(format!("{n}-{name}"))
-}
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(format!("{name}.json"))
-}
-
-fn vcx(args: &[&str]) -> Output {
-    Command::new(VCX).args(args).output().unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{example, fails, s, temp_path, vcx};
 
 fn stdout(out: &Output) -> String {
     assert!(
@@ -60,22 +38,12 @@ fn build(scene: &Path, extra: &[&str]) -> PathBuf {
 
 /// The command must fail with exit 2 and one `error:` line naming the file and containing
 /// every string of `expect`.
-fn rejects(args: &[&str], file: &Path, expect: &[&str]) -> String {
-    let out = vcx(args);
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(out.stdout.is_empty(), "{args:?}: stdout not empty");
-    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
-    assert!(stderr.starts_with("error: "), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
+fn rejects(args: &[&str], file: &Path, expect: &[&str]) {
+    let stderr = fails(args, expect);
     assert!(
         stderr.contains(s(file)),
         "{args:?}: no file name in {stderr}"
     );
-    for e in expect {
-        assert!(stderr.contains(e), "{args:?}: {e:?} not in {stderr}");
-    }
-    stderr
 }
 
 #[test]

@@ -5,13 +5,12 @@
 //! and exactly one `error: ` line.
 
 use core::f64::consts::TAU;
-use core::sync::atomic::{AtomicUsize, Ordering};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
 
-const VCX: &str = env!("CARGO_BIN_EXE_vcx");
+mod common;
+use common::{example, temp_path, vcx};
 
 /// Paper scene. The viewpoint is the origin; no two vertices are collinear with it and no
 /// edge's line passes through it.
@@ -36,50 +35,22 @@ const PAPER: &str = r#"{"objects": [
 
 /// A fresh file in a per-process temporary directory.
 fn temp_file(name: &str, text: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let dir = std::env::temp_dir().join(format!("vcx-cli-view-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let path = dir.join(format!("{n}-{name}"));
+    let path = temp_path(name);
     std::fs::write(&path, text).unwrap();
     path
 }
 
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(format!("{name}.json"))
-}
-
-fn vcx(args: &[&str]) -> Output {
-    Command::new(VCX).args(args).output().unwrap()
-}
-
-/// Requires exit 0 and empty stderr; returns stdout.
+/// [`common::ok`], and stdout ends with a newline.
 fn ok(args: &[&str]) -> String {
-    let out = vcx(args);
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
-    assert!(stderr.is_empty(), "{args:?}: {stderr}");
-    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stdout = common::ok(args);
     assert!(stdout.ends_with('\n'), "{args:?}: {stdout}");
     stdout
 }
 
-/// Requires exit 2, empty stdout and one `error: ` line containing every string of
-/// `expect`; returns the line.
+/// [`common::fails`], the line ending with a newline; returns the line.
 fn fails(args: &[&str], expect: &[&str]) -> String {
-    let out = vcx(args);
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(out.stdout.is_empty(), "{args:?}: stdout not empty");
-    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+    let stderr = common::fails(args, expect);
     assert!(stderr.ends_with('\n'), "{args:?}: {stderr}");
-    assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
-    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-    for e in expect {
-        assert!(stderr.contains(e), "{args:?}: {e:?} not in {stderr}");
-    }
     stderr.trim_end().to_string()
 }
 
