@@ -12,7 +12,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use vcx::format::{self, decode, decode_into, encode, EncodeOptions, FormatError, Header};
 use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
-use vcx::partition::{build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError};
+use vcx::partition::{
+    build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError, Slices,
+};
 use vcx::walk::{view, view_into, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_demo::{generate, SceneKind};
@@ -419,57 +421,30 @@ fn region_files_round_trip() {
     ));
 
     // No heap: decode into caller storage, rebuild the derived state, walk.
-    let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
-    let mut objects = vec![SceneObject::BLANK; n];
-    let mut points = vec![Point::default(); nv];
-    let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
-    let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
-    let d = decode_into::<1024, 64>(
-        &bytes,
-        Scratch {
-            objects: &mut objects,
-            points: &mut points,
-        },
-        &mut vertices,
-        &mut cylinders,
-    )
+    with_decoded::<1024, _>(&bytes, |ds, slices, region, out| {
+        assert_eq!(region, Some(r));
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut walked = 0;
+        for q in points_in(&r, 30, &mut rng) {
+            let Ok(k) = view_into(slices, ds, q, out) else {
+                continue;
+            };
+            let got: ViewKey = out[..k]
+                .iter()
+                .map(|i| (i.start.vector(), i.object, i.start_vertex))
+                .collect();
+            assert_eq!(Ok(got), view_key(&c, &sr, q));
+            walked += 1;
+        }
+        assert!(walked > 10);
+        for q in points_outside(&r) {
+            assert_eq!(
+                view_into(slices, ds, q, out),
+                Err(WalkError::OutsideRegion(r))
+            );
+        }
+    })
     .unwrap();
-    assert_eq!(d.region, Some(r));
-    let ds = d.scene.as_ref();
-    let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
-    let mut border = common::BorderVecs::new(sizes);
-    let buffers = border.buffers();
-    let slices = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers)
-        .unwrap()
-        .with_region(d.region);
-    let mut rng = ChaCha8Rng::seed_from_u64(4);
-    let mut out = vec![
-        ViewInterval {
-            start: vcx::geom::sos::Angle::ZERO,
-            object: None,
-            start_vertex: None,
-        };
-        vcx::walk::view_capacity(n)
-    ];
-    let mut walked = 0;
-    for q in points_in(&r, 30, &mut rng) {
-        let Ok(k) = view_into(&slices, &ds, q, &mut out) else {
-            continue;
-        };
-        let got: ViewKey = out[..k]
-            .iter()
-            .map(|i| (i.start.vector(), i.object, i.start_vertex))
-            .collect();
-        assert_eq!(Ok(got), view_key(&c, &sr, q));
-        walked += 1;
-    }
-    assert!(walked > 10);
-    for q in points_outside(&r) {
-        assert_eq!(
-            view_into(&slices, &ds, q, &mut out),
-            Err(WalkError::OutsideRegion(r))
-        );
-    }
 }
 
 /// `decode_into`, the derived state rebuilt into caller buffers, a view walked (no heap
@@ -479,12 +454,27 @@ fn walk_decoded_into(bytes: &[u8], q: QueryPoint) {
     if h.objects > 64 || h.scene_vertices > 256 || h.cylinders > 4096 {
         return;
     }
+    let _ = with_decoded::<256, _>(bytes, |ds, c, _, out| {
+        let _ = view_into(c, ds, q, out);
+    });
+}
+
+/// `bytes` decoded into caller storage sized from its header (`decode_into`, up to `V`
+/// scene vertices and 64 objects), the derived state rebuilt into caller buffers
+/// (`Complex::from_slices`, with the file's region), and a view buffer of
+/// `view_capacity(objects)`: `f` gets the scene, the complex, the region and the buffer.
+/// Any failure before `f` is an `Err` naming it.
+fn with_decoded<const V: usize, R>(
+    bytes: &[u8],
+    f: impl FnOnce(&SceneRef<'_>, &Complex<Slices<'_>>, Option<Region>, &mut [ViewInterval]) -> R,
+) -> Result<R, String> {
+    let h = Header::read(bytes).map_err(|e| format!("header: {e}"))?;
     let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
     let mut objects = vec![SceneObject::BLANK; n];
     let mut points = vec![Point::default(); nv];
     let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
     let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
-    let Ok(d) = decode_into::<256, 64>(
+    let d = decode_into::<V, 64>(
         bytes,
         Scratch {
             objects: &mut objects,
@@ -492,17 +482,14 @@ fn walk_decoded_into(bytes: &[u8], q: QueryPoint) {
         },
         &mut vertices,
         &mut cylinders,
-    ) else {
-        return;
-    };
+    )
+    .map_err(|e| format!("decode_into: {e}"))?;
     let ds = d.scene.as_ref();
     let sizes = BorderSizes::exact(n, d.vertices.len(), d.cylinders);
     let mut border = common::BorderVecs::new(sizes);
-    let buffers = border.buffers();
-    let Ok(c) = Complex::from_slices(&ds, d.vertices, d.cylinders, buffers) else {
-        return;
-    };
-    let c = c.with_region(d.region);
+    let c = Complex::from_slices(&ds, d.vertices, d.cylinders, border.buffers())
+        .map_err(|e| format!("from_slices: {e:?}"))?
+        .with_region(d.region);
     let mut out = vec![
         ViewInterval {
             start: vcx::geom::sos::Angle::ZERO,
@@ -511,7 +498,7 @@ fn walk_decoded_into(bytes: &[u8], q: QueryPoint) {
         };
         vcx::walk::view_capacity(n)
     ];
-    let _ = view_into(&c, &ds, q, &mut out);
+    Ok(f(&ds, &c, d.region, &mut out))
 }
 
 fn reseal(bytes: &mut [u8]) {
