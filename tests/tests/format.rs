@@ -15,7 +15,7 @@ use vcx::format::{
 use vcx::partition::{build_by_sweep, BuildOptions, Complex, CylinderId, History, Wall};
 use vcx::walk::{ray_tree, view};
 use vcx::{Eta, Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
-use vcx_tests::generators::{compare_view, SceneSpec};
+use vcx_tests::generators::compare_view;
 
 fn pt(x: i32, y: i32) -> Point {
     Point::from_raw(x << 16, y << 16).unwrap()
@@ -300,12 +300,7 @@ fn degenerate_scenes_round_trip() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let mut done = 0;
     for _ in 0..400 {
-        let len = rng.gen_range(16..600);
-        let raw: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
-        let Some(spec) = vcx_tests::generators::decode::<SceneSpec>(&raw) else {
-            continue;
-        };
-        let Ok(s) = spec.realize().scene() else {
+        let Some(s) = common::random_spec_scene(&mut rng) else {
             continue;
         };
         let s = without_screens(&s.as_ref());

@@ -18,7 +18,7 @@ use vcx::partition::{
 use vcx::walk::{view, view_into, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_demo::{generate, SceneKind};
-use vcx_tests::generators::{compare_view, SceneSpec};
+use vcx_tests::generators::compare_view;
 
 /// Scale of the randomized checks: `VCX_LONG=1` multiplies it by 20.
 fn scale() -> usize {
@@ -235,12 +235,7 @@ fn degenerate_scenes() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     let mut done = 0;
     for _ in 0..600 * scale() {
-        let len = rng.gen_range(16..600);
-        let raw: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
-        let Some(spec) = vcx_tests::generators::decode::<SceneSpec>(&raw) else {
-            continue;
-        };
-        let Ok(s) = spec.realize().scene() else {
+        let Some(s) = common::random_spec_scene(&mut rng) else {
             continue;
         };
         let sr = s.as_ref();

@@ -6,7 +6,8 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use vcx::geom::sos::Angle;
 use vcx::partition::{BorderBuffers, BorderSizes, CylinderId};
-use vcx::{QueryPoint, SceneRef};
+use vcx::{QueryPoint, Scene, SceneRef};
+use vcx_tests::generators::SceneSpec;
 
 /// Owned buffers of the sizes given for the derived state of `Complex::from_slices`.
 pub struct BorderVecs {
@@ -52,4 +53,13 @@ pub fn random_point(rng: &mut ChaCha8Rng, s: &SceneRef<'_>) -> QueryPoint {
         ((rng.gen_range(a..=b) as i64) << 16) + rng.gen_range(0..1i64 << 16)
     };
     QueryPoint::from_raw(r(rng, lo.0, hi.0), r(rng, lo.1, hi.1)).unwrap()
+}
+
+/// A degenerate scene from random fuzzer-style bytes (`generators::SceneSpec`, as the fuzz
+/// targets decode them), or `None` when the bytes make no spec or no valid scene.
+pub fn random_spec_scene(rng: &mut ChaCha8Rng) -> Option<Scene> {
+    let len = rng.gen_range(16..600);
+    let raw: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
+    let spec = vcx_tests::generators::decode::<SceneSpec>(&raw)?;
+    spec.realize().scene().ok()
 }
