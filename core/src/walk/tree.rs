@@ -282,10 +282,10 @@ fn sweep<S: Storage>(
         }
         return Ok(tree.assemble(&leaves));
     };
-    let (context, inside) = tree.clip(q, pieces, f, t);
+    let (context, inside) = tree.clip(q, pieces, f, t, vertices);
     // A boundary exactly on `from` is resolved against the last leaf before it.
     let mut before = Vec::new();
-    if let Some(p) = context.filter(|_| vertices) {
+    if let Some(p) = context {
         tree.piece(q, depth, p, &mut before)?;
     }
     for p in inside {
@@ -324,13 +324,15 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// starting at `f` and the last ending at `t`; and the left side of `f` when a boundary
     /// of the full tree may lie exactly on `f`: the piece before when a piece starts there,
     /// else the containing piece up to `f` when a vertex that can cause a primary-level
-    /// boundary (one of the piece's object, or any behind a screen) lies on the ray.
+    /// boundary (one of the piece's object, or any behind a screen) lies on the ray — only
+    /// if `context` (the vertex of that boundary is wanted).
     fn clip(
         &self,
         q: QueryPoint,
         pieces: Vec<Piece>,
         f: Angle,
         t: Angle,
+        context: bool,
     ) -> (Option<Piece>, Vec<Piece>) {
         let n = pieces.len();
         // Position counter-clockwise from `f`: (lap, angle), lap 1 for directions before `f`.
@@ -360,7 +362,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         let on_f = pieces
             .get(k0)
             .is_some_and(|p| p.from.angle.cmp_exact(&f) == Ordering::Equal);
-        let context = if on_f {
+        let context = if !context {
+            None
+        } else if on_f {
             pieces.get((k0 + n - 1) % n).cloned()
         } else {
             pieces
