@@ -22,7 +22,6 @@ pub mod geom;
 mod ids;
 pub mod line_space;
 pub mod partition;
-#[cfg(feature = "alloc")]
 pub mod render;
 pub mod scene;
 pub mod walk;

@@ -27,7 +27,8 @@
 //! makes no zero-width piece.
 //!
 //! Everything here writes into caller buffers or calls back: nothing allocates except the
-//! convenience [`CoverageTable`].
+//! convenience `CoverageTable` (feature `alloc`). Without a heap, a frame's ray tree comes
+//! from [`crate::walk::frame_tree_into`] into a caller's buffer of [`FrameInterval`]s.
 //!
 //! # Hits and the `f64` optics
 //!
@@ -39,6 +40,7 @@
 //! rays of one eye, remembering per level the edge hit and the optics derived from it, and
 //! [`centre_hits`] gives a frame's centre intervals and hits in one pass.
 
+#[cfg(feature = "alloc")]
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
@@ -46,7 +48,9 @@ use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
 use crate::scene::{Material, ObjectId, SceneRef};
-use crate::walk::{TreeInterval, ViewInterval};
+#[cfg(feature = "alloc")]
+use crate::walk::TreeInterval;
+use crate::walk::{TreeSpan, ViewInterval};
 
 /// Largest field of view, just under π (the image line needs `fov < π`).
 pub const MAX_FOV: f64 = 179.0 * core::f64::consts::PI / 180.0;
@@ -346,7 +350,43 @@ impl Interval for ViewInterval {
     }
 }
 
+#[cfg(feature = "alloc")]
 impl Interval for TreeInterval {
+    fn exact_start(&self) -> Option<Angle> {
+        self.exact_start
+    }
+    fn start_radians(&self) -> f64 {
+        self.start
+    }
+    fn branch(&self) -> &[ObjectId] {
+        &self.branch
+    }
+}
+
+/// A ray-tree interval with its branch in fixed capacity: what a device keeps of the
+/// spans of [`crate::walk::frame_tree_into`] to render a frame without a heap.
+#[derive(Clone, Debug)]
+pub struct FrameInterval {
+    /// As [`TreeSpan::start`].
+    pub start: f64,
+    /// As [`TreeSpan::exact_start`].
+    pub exact_start: Option<Angle>,
+    /// The branch (at most [`MAX_BRANCH`] objects).
+    pub branch: Branch,
+}
+
+impl FrameInterval {
+    /// The span kept, or `None` if its branch is longer than [`MAX_BRANCH`].
+    pub fn new(span: &TreeSpan<'_>) -> Option<FrameInterval> {
+        Some(FrameInterval {
+            start: span.start,
+            exact_start: span.exact_start,
+            branch: Branch::from_slice(span.branch).ok()?,
+        })
+    }
+}
+
+impl Interval for FrameInterval {
     fn exact_start(&self) -> Option<Angle> {
         self.exact_start
     }
@@ -595,6 +635,7 @@ impl<'a, I: Interval> Centres<'a, I> {
 
 /// Per-column coverage by **branch** (pieces of equal branch merged), the common output
 /// of the complex and of the ray casters of `vcx-baselines`.
+#[cfg(feature = "alloc")]
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CoverageTable {
     /// `entries[start[c]..start[c + 1]]` are column `c`'s branches with their fractions.
@@ -603,6 +644,7 @@ pub struct CoverageTable {
     pub entries: Vec<(Branch, f64)>,
 }
 
+#[cfg(feature = "alloc")]
 impl CoverageTable {
     /// An empty table; fill it with [`CoverageTable::push`] and [`CoverageTable::end_column`].
     pub fn new() -> CoverageTable {

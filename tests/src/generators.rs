@@ -1515,6 +1515,22 @@ pub fn compare_tree_ranges(
         // What a frame draws: the same intervals, without vertices.
         let frame =
             vcx::walk::frame_tree(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
+        // The same streamed without a heap (fixed-capacity frames).
+        let mut streamed = Vec::new();
+        let mut scratch = Box::new(vcx::walk::TreeScratch::<64>::new());
+        vcx::walk::frame_tree_into(c, s, q, depth, from, to, &mut scratch, |i| {
+            streamed.push((i.start.to_bits(), i.branch.to_vec()))
+        })
+        .map_err(|e| at(e.to_string()))?;
+        let collected: Vec<_> = frame
+            .iter()
+            .map(|i| (i.start.to_bits(), i.branch.clone()))
+            .collect();
+        if streamed != collected {
+            return Err(at(format!(
+                "\n frame_tree_into {streamed:?}\n frame_tree {collected:?}"
+            )));
+        }
         let same_start = |a: &TreeInterval, b: &TreeInterval| match (a.exact_start, b.exact_start) {
             (Some(x), Some(y)) => x.cmp_exact(&y).is_eq(),
             (x, y) => x.is_none() && y.is_none(),

@@ -478,3 +478,92 @@ fn frame_columns_allocate_nothing() {
     }
     assert!(checked >= 3, "{checked}");
 }
+
+/// Ray trees walked in lock step ([`vcx::walk::frame_tree_into`]) over slice storage
+/// allocate nothing — the sweep, the copy into a caller's buffer of `FrameInterval`s and
+/// the frame's coverage — and give the intervals of `frame_tree` on the owned complex
+/// (which `tests/tests/ray_trees.rs` checks against the reference), for fields of view and
+/// the full circle, through mirrors, refractive objects and screens.
+#[test]
+fn lock_step_ray_trees_allocate_nothing() {
+    use vcx::geom::predicates::Direction;
+    use vcx::render::{angle_order, coverage, Camera, FrameInterval};
+    use vcx::walk::{frame_tree, frame_tree_into, TreeScratch};
+    let _g = lock();
+    let mut scratch = Box::new(TreeScratch::<32>::new());
+    let mut buf: Box<heapless::Vec<FrameInterval, 1024>> = Box::default();
+    let mut checked = 0;
+    for (kind, n, seed) in [(SceneKind::Hall, 8, 2), (SceneKind::Mixed, 10, 3)] {
+        let scene = generate(kind, n, seed).expect("generator").scene;
+        let s = scene.as_ref();
+        let owned = build_by_sweep(&s).expect("build");
+        let sizes = BorderSizes::exact(s.len(), owned.vertices().len(), owned.cylinders());
+        let (vertices, cylinders) = (owned.vertices().to_vec(), owned.cylinders().to_vec());
+        let mut border = common::BorderVecs::new(sizes);
+        let complex =
+            Complex::from_slices(&s, &vertices, &cylinders, border.buffers()).expect("fits");
+        for (k, q) in viewpoints(&s, 10).into_iter().enumerate() {
+            let camera = Camera::new(q, 0.7 * k as f64, 1.3, 320).expect("camera");
+            let (from, to) = camera.range();
+            let full = Direction { x: 3, y: -1 };
+            for (depth, (from, to)) in [(5, (from, to)), (3, (full, full))] {
+                let Ok(mut want) = frame_tree(&owned, &s, q, depth, from, to) else {
+                    continue;
+                };
+                angle_order(&mut want);
+                let (allocated, got) = allocations(|| {
+                    buf.clear();
+                    let mut fits = true;
+                    let r = frame_tree_into(&complex, &s, q, depth, from, to, &mut scratch, |i| {
+                        fits &= FrameInterval::new(&i).is_some_and(|f| buf.push(f).is_ok());
+                    });
+                    angle_order(&mut buf[..]);
+                    let mut sum = 0.0;
+                    coverage(&camera, &buf[..], |p| sum += p.fraction);
+                    (r, fits, sum)
+                });
+                assert_eq!(
+                    allocated, 0,
+                    "{kind:?} q {q:?}: the lock-step tree allocated"
+                );
+                let (r, fits, sum) = got;
+                assert!(r.is_ok() && fits, "{kind:?} q {q:?}: {r:?}");
+                assert!(sum >= 320.0 - 1e-6, "{kind:?} q {q:?}: coverage {sum}");
+                assert_eq!(buf.len(), want.len(), "{kind:?} q {q:?}");
+                for (g, w) in buf.iter().zip(&want) {
+                    assert_eq!(g.branch.as_slice(), w.branch.as_slice(), "{kind:?} q {q:?}");
+                    assert_eq!(g.start.to_bits(), w.start.to_bits(), "{kind:?} q {q:?}");
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 20, "{checked}");
+}
+
+/// A scratch too small for the tree is an error, never a panic or a cut tree; and the
+/// scratch's size is within the documented `2 KiB · (N + 2)`.
+#[test]
+fn tree_scratch_is_bounded() {
+    use vcx::geom::predicates::Direction;
+    use vcx::walk::{frame_tree_into, TreeScratch};
+    let scene = generate(SceneKind::Hall, 8, 2).expect("generator").scene;
+    let s = scene.as_ref();
+    let complex = build_by_sweep(&s).expect("build");
+    let q = viewpoints(&s, 1)[0];
+    let d = Direction { x: 1, y: 0 };
+    let mut small = TreeScratch::<3>::new();
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut small, |_| {});
+    assert_eq!(r, Err(WalkError::TreeTooDeep));
+    let mut enough = Box::new(TreeScratch::<16>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut enough, |_| {});
+    assert_eq!(r, Ok(()));
+    for (n, size) in [
+        (1, size_of::<TreeScratch<1>>()),
+        (16, size_of::<TreeScratch<16>>()),
+        (32, size_of::<TreeScratch<32>>()),
+    ] {
+        println!("TreeScratch<{n}>: {size} bytes");
+        assert!(size <= 2048 * (n + 2), "TreeScratch<{n}> is {size} bytes");
+    }
+}

@@ -10,7 +10,6 @@
 pub mod point;
 pub mod predicates;
 pub mod sos;
-#[cfg(feature = "alloc")] // used by ray trees only
 pub(crate) mod wide;
 
 #[cfg(feature = "naive-f64")]

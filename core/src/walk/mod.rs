@@ -10,37 +10,48 @@
 //! The walk starts at θ = 0 among the cylinders crossing the permanent wall and visits
 //! the events in perturbed order; the view is the sequence of ceilings.
 //!
-//! # Ray trees (`ray_tree`, feature `alloc`)
+//! # Ray trees (`frame_tree_into` without a heap; `ray_tree` and friends with `alloc`)
 //!
 //! The walker has two anchorings ([`Anchor`]): `Point` (the layer containing the eye, the
 //! view) and `Floor(M)` (the layer whose floor is M: the segments starting where the line
-//! leaves M), walked over an exact open angular range from a (virtual) eye. An anchored
-//! walk starts in the cylinder with floor M that contains the eye's line just after the
-//! range start, turned by more than the symbolic perturbation (everything exactly on the
-//! opening ray is behind: the range is open), found by climbing the stack of M's floor
-//! cylinders through the per-chain tilings (`Complex::across`; a scan only where
-//! something lies exactly on the opening ray and the two disagree); events on the closing
-//! ray are dropped.
+//! leaves M), walked over an exact open angular range from a (virtual) eye, in either
+//! direction (`Walker`: resumable, one event per call). An anchored walk starts in the
+//! cylinder with floor M that contains the eye's line just after the range start (just
+//! before it, walking clockwise), turned by more than the symbolic perturbation
+//! (everything exactly on the opening ray is behind: the range is open), found by climbing
+//! the stack of M's floor cylinders through the per-chain tilings (`Complex::across`; a
+//! scan only where something lies exactly on the opening ray and the two disagree); events
+//! on the closing ray are dropped.
 //!
-//! The tree is built by **recursion per interval**, not by the paper's lock-step walk of
-//! all generations: each primary interval is resolved by its ceiling —
+//! Each piece of a walk (a run with one ceiling) is resolved by its ceiling —
 //! * a **screen** S: the same eye walks the same range anchored to S (S is not in the
 //!   branch and uses no depth);
 //! * a **mirror** M: the range is split by the directions to M's vertices (the hit edge
 //!   changes there); per edge the eye is reflected across the edge's line and rounded
 //!   exactly to the query grid ([`optics`]); the range is mapped to the new eye (exactly
 //!   `E' → v` at a vertex of the edge, otherwise the direction to the hit point on the
-//!   edge — computed in `f64` at 2⁻⁵² rad, it only places the range end) and reversed
-//!   (mirrors flip orientation); the new eye walks it anchored to M, one level deeper;
+//!   edge — computed in `f64` at 2⁻⁵² rad, it only places the range end); mirrors flip
+//!   orientation, so the new eye walks it anchored to M **clockwise** where the mirror's
+//!   eye walked counter-clockwise (and back at the next mirror), one level deeper;
 //! * a **refractive** M (tangent law, DESIGN.md §6): split by the entry edge, entry eye
 //!   `E₁ = F + η(E − F)`, split by the exit edge (M's own vertices seen from `E₁`), exit
 //!   eye `E₂ = F' + (E₁ − F')/η`, walked anchored to M; orientation is preserved, and the
 //!   pass is one depth level with M once in the branch.
 //!
+//! **Lock step** (the paper's §5): the generations in use are a stack of frames in a
+//! fixed-capacity [`TreeScratch`] — the primary walk, per level the split by a mirror's or
+//! refractive object's edges and the walk behind it, a walk behind each screen on the way.
+//! The top frame yields its next piece, which is a leaf or pushes the frame resolving it;
+//! an exhausted frame is popped and its parent resumes. Since every walk goes in the
+//! direction that maps to counter-clockwise primary directions, the leaves come out in
+//! primary order and each generation advances exactly as far as the primary direction: no
+//! buffering, no allocation, no recursion. Leaves with equal branches merge into intervals
+//! as they come; a boundary's vertex is resolved when the first leaf after it arrives,
+//! while the hops it was made through are still on the stack. The `alloc` entry points
+//! ([`ray_tree`], [`ray_tree_range`], [`frame_tree`]) collect the same stream.
+//!
 //! Boundaries deeper than the primary are mapped back to primary angles in `f64` for
-//! output. A later optimization keeps the secondary traces of one primary interval in a
-//! fixed-capacity `heapless` array and walks them in lock step (no allocation; the
-//! current version allocates the leaves and branches).
+//! output.
 //!
 //! A rounded eye on or across its interface line is an error
 //! ([`WalkError::DegenerateOptics`], as in the reference); an eye beyond the query range
@@ -74,12 +85,12 @@
 //! | 89 | 41.803 | 88.500 | +46.698 |
 
 pub mod optics;
-#[cfg(feature = "alloc")]
 mod tree;
 mod view;
 
 #[cfg(feature = "alloc")]
 pub use tree::{frame_tree, ray_tree, ray_tree_range, TreeInterval};
+pub use tree::{frame_tree_into, TreeScratch, TreeSpan, MAX_TREE_DEPTH};
 #[cfg(feature = "alloc")]
 pub use view::{view, view_range};
 pub use view::{view_capacity, view_into, view_range_into, ViewInterval};
@@ -110,7 +121,8 @@ pub enum Anchor {
     Floor(ObjectId),
 }
 
-/// A position on the unwrapped circle of a range walk: `lap` 1 is past θ = 2π.
+/// A position on the unwrapped circle of a range walk: `lap` 1 is past θ = 2π
+/// (counter-clockwise) or past θ = 0 (clockwise, see [`Walker`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Position {
     pub(crate) lap: u8,
@@ -181,6 +193,9 @@ pub enum WalkError {
         /// Its material.
         material: crate::scene::Material,
     },
+    /// A ray tree needs more frames (generations, screens on the way) or a longer branch
+    /// than its [`TreeScratch`] holds.
+    TreeTooDeep,
 }
 
 impl WalkError {
@@ -215,6 +230,7 @@ impl core::fmt::Display for WalkError {
             }
             WalkError::EyeOutOfRange => write!(f, "a virtual eye left the query range"),
             WalkError::NoStart => write!(f, "an anchored walk found no start cylinder"),
+            WalkError::TreeTooDeep => write!(f, "the ray tree is deeper than its scratch holds"),
             WalkError::BufferFull { needed } => {
                 write!(f, "output buffer full: at least {needed} intervals needed")
             }
@@ -258,6 +274,23 @@ impl<S: Storage> Complex<S> {
         q: QueryPoint,
         mut step: impl FnMut(&Step),
     ) -> Result<(), WalkError> {
+        let cur = self.trace_start(scene, q)?;
+        step(&Step {
+            angle: Angle::ZERO,
+            vertex: None,
+            ahead: false,
+            cylinder: cur,
+        });
+        self.walk_from(scene, q, Anchor::Point, cur, Angle::ZERO, None, &mut step)
+    }
+
+    /// The cylinder of the trace of the free point `q` at θ = 0, where
+    /// [`Complex::walk_trace`] starts (see there).
+    pub(crate) fn trace_start(
+        &self,
+        scene: &SceneRef<'_>,
+        q: QueryPoint,
+    ) -> Result<CylinderId, WalkError> {
         // A pruned complex holds only what views from its region need (`partition::region`).
         if let Some(r) = self.region().filter(|r| !r.contains(q)) {
             return Err(WalkError::OutsideRegion(r));
@@ -288,16 +321,8 @@ impl<S: Storage> Complex<S> {
                     && c.top.is_none_or(|t| height(&t).is_none_or(|y| y >= qy))
             })
             .map(|(i, c)| (CylinderId::from_index(i).unwrap_or(CylinderId::ZERO), c));
-        let cur = self
-            .locate_among(scene, q, &Angle::ZERO, zero)
-            .ok_or(WalkError::Corrupt)?;
-        step(&Step {
-            angle: Angle::ZERO,
-            vertex: None,
-            ahead: false,
-            cylinder: cur,
-        });
-        self.walk_from(scene, q, Anchor::Point, cur, Angle::ZERO, None, &mut step)
+        self.locate_among(scene, q, &Angle::ZERO, zero)
+            .ok_or(WalkError::Corrupt)
     }
 
     /// The walker shared by [`Complex::walk_trace`] and the anchored walks of ray trees:
@@ -306,141 +331,746 @@ impl<S: Storage> Complex<S> {
     /// the walk then crosses the permanent wall to the right neighbour). Calls `step` for
     /// every cylinder entered after the start. With [`Anchor::Floor`]`(m)` the chains of `m`
     /// are never crossed (the caller keeps the trace inside `m`'s sheet) and the eye may lie
-    /// anywhere, even inside an object: only the tangents that exist are used.
+    /// anywhere, even inside an object: only the tangents that exist are used. A loop over
+    /// a counter-clockwise [`Walker`].
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn walk_from(
         &self,
         scene: &SceneRef<'_>,
         q: QueryPoint,
         anchor: Anchor,
-        mut cur: CylinderId,
+        cur: CylinderId,
         from: Angle,
         end: Option<Position>,
         step: &mut impl FnMut(&Step),
     ) -> Result<(), WalkError> {
-        use core::cmp::Ordering;
-        // Angles compared more than once carry their half-plane and vector (`KeyedAngle`).
-        let mut theta = from.keyed();
-        let mut lap = 0u8;
-        let before = |a: (u8, &KeyedAngle), b: (u8, &KeyedAngle)| {
-            a.0 < b.0 || (a.0 == b.0 && a.1.cmp(b.1) == Ordering::Less)
-        };
-        let end = end.map(|e| (e.lap, e.angle.keyed()));
-        // The tangents from `q` to the last few chain objects: consecutive cylinders of a
-        // trace mostly share a chain, and the tangents depend only on the object.
-        let mut cache = [(None::<ObjectId>, [(0usize, Bound::Lower); 2], 0usize); TANGENT_CACHE];
-        let mut next_slot = 0;
-        let mut tangents = |object: ObjectId| {
-            if let Some(&(_, t, n)) = cache.iter().find(|e| e.0 == Some(object)) {
-                return (t, n);
-            }
-            let (t, n) = crate::line_space::tangents_from(scene, object, q);
-            if let Some(slot) = cache.get_mut(next_slot % TANGENT_CACHE) {
-                *slot = (Some(object), t, n);
-            }
-            next_slot += 1;
-            (t, n)
-        };
-        for _ in 0..4 * self.cylinders().len() + 4 {
-            let c = self.cylinder(cur).ok_or(WalkError::Corrupt)?;
-            // The first exit after θ: the right wall, or a crossing of the bottom or top chain.
-            let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
-                // The permanent wall ends a full-circle walk; a range walk crosses it.
-                Wall::Zero => end.map(|_| (lap + 1, Angle::ZERO.keyed(), None)),
-                w => self.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
-            };
-            for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
-                let Some(chain) = chain else { continue };
-                if anchor == Anchor::Floor(chain.object) {
-                    continue;
-                }
-                let (found, count) = tangents(chain.object);
-                for &(h, bound) in found.iter().take(count) {
-                    let forward = Angle::from_query(q, ranked(scene, h));
-                    // The line q → h lies on `bound`; its reverse on the other chain.
-                    let (a, ahead) = if bound == chain.bound {
-                        (forward.keyed(), true)
-                    } else {
-                        (forward.reversed().keyed(), false)
-                    };
-                    let later = a.cmp(&theta) == Ordering::Greater;
-                    if later
-                        && best
-                            .as_ref()
-                            .is_none_or(|(l, b, _)| before((lap, &a), (*l, b)))
-                    {
-                        best = Some((
-                            lap,
-                            a,
-                            Some(ChainExit {
-                                chain,
-                                side,
-                                vertex: h,
-                                ahead,
-                            }),
-                        ));
-                    }
-                }
-            }
-            let Some((l, angle, exit)) = best else {
-                return match end {
-                    None => Ok(()), // θ reached 2π
-                    Some(_) => Err(WalkError::Corrupt),
-                };
-            };
-            if let Some((e_lap, e_angle)) = &end {
-                if !before((l, &angle), (*e_lap, e_angle)) {
-                    return Ok(());
-                }
-            }
-            theta = angle;
-            lap = l;
-            cur = match exit {
-                None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
-                Some(ChainExit {
-                    chain, side, ahead, ..
-                }) => {
-                    // Lines on the far side of a lower chain cross the object iff that side
-                    // is above it; of an upper chain iff it is below.
-                    let crossed = match chain.bound {
-                        Bound::Lower => Side::Above,
-                        Bound::Upper => Side::Below,
-                    };
-                    let layer = if side != crossed {
-                        Layer::Around
-                    } else if ahead || matches!(anchor, Anchor::Floor(_)) {
-                        // Point: h ahead of q, so the segment through q ends at the object.
-                        // Floor(m): the object appears between m and the old ceiling.
-                        Layer::Before
-                    } else {
-                        Layer::After
-                    };
-                    // The entered cylinder overlaps the one left: scan the far side from
-                    // there (usually a step or two) instead of bisecting the tiling.
-                    let next = self
-                        .across_from(scene, cur, side, layer, &theta.angle)
-                        .ok_or(WalkError::Corrupt)?;
-                    if let Anchor::Floor(m) = anchor {
-                        if self.cylinder(next).and_then(|n| n.floor) != Some(m) {
-                            return Err(WalkError::Corrupt);
-                        }
-                    }
-                    next
-                }
-            };
-            let (vertex, ahead) = exit.map_or((None, false), |e| (Some(e.vertex), e.ahead));
-            step(&Step {
-                angle: theta.angle,
-                vertex,
-                ahead,
-                cylinder: cur,
-            });
+        let mut walker = Walker::new(q, anchor, cur, from, end, true);
+        while let Some(s) = walker.next_step_in::<S, true>(self, scene)? {
+            step(&s);
         }
-        Err(WalkError::Corrupt)
+        Ok(())
     }
 
     /// The object a cylinder's rays see ahead.
     pub fn ceiling(&self, id: CylinderId) -> Option<ObjectId> {
         self.cylinder(id).and_then(|c| c.ceiling)
+    }
+}
+
+/// One entry of a walk's tangent cache: the object and its tangents from the eye.
+type CachedTangents = (Option<ObjectId>, [(usize, Bound); 2], usize);
+
+/// A resumable walk of the trace of `q`: [`Walker::next_step`] advances one event at a
+/// time, so several traces (the generations of a ray tree) can be walked in lock step.
+/// Allocates nothing.
+///
+/// Counter-clockwise (`ccw`) it visits the events after θ, smallest first: the exits of a
+/// cylinder are its right wall and the crossings of its chains after θ. Clockwise (the
+/// traces behind an odd number of mirrors, which flip orientation) it is the mirror image:
+/// the events before θ, largest first; the exits are the left wall (to the left
+/// neighbour) and the chain crossings before θ, crossed with the same side and layer rule
+/// (which depends on the tangent line, not on the direction of the walk). `from` is the
+/// angle at which the walk entered `cur` (or any angle inside it): the walk continues
+/// strictly after it (ccw) or strictly before it (cw), so a clockwise walk of the cylinder
+/// a counter-clockwise one entered at α and left at β starts there at β.
+///
+/// Laps: a walk with an `end` crosses the permanent wall θ = 0 once per lap.
+/// Counter-clockwise that is the right wall [`Wall::Zero`] (θ = 2π), entered on `lap + 1`
+/// at θ = 0.
+/// Clockwise it is the left wall [`Wall::Zero`] (θ = 0), entered on `lap + 1` at θ = 2π,
+/// which no [`Angle`] represents: the walker keeps a flag (`full`) under which every angle
+/// lies before it, and the [`Step`] reports [`Angle::ZERO`]. A clockwise [`Position`]
+/// `{ lap, angle }` lies past the events of smaller laps and of the same lap with larger
+/// angles, so `Position { lap: 1, angle: Angle::ZERO }` ends a clockwise walk started at
+/// θ = 0 after one full turn. With `end: None` a walk stops at the permanent wall in
+/// either direction (θ = 2π ccw, θ = 0 cw) without crossing it.
+#[derive(Clone, Debug)]
+pub(crate) struct Walker {
+    q: QueryPoint,
+    anchor: Anchor,
+    /// The cylinder the walk is in.
+    cur: CylinderId,
+    /// The angle of the last event (or the start); meaningless while `full`.
+    theta: KeyedAngle,
+    /// Clockwise only: θ is 2π (the walk just crossed the permanent wall).
+    full: bool,
+    lap: u8,
+    end: Option<(u8, KeyedAngle)>,
+    /// The tangents from `q` to the last few chain objects (round robin): consecutive
+    /// cylinders of a trace mostly share a chain, and the tangents depend only on the
+    /// object.
+    cache: [CachedTangents; TANGENT_CACHE],
+    next_slot: usize,
+    /// Events taken so far; a walk takes at most `8 · cylinders + 8`: a lap enters each
+    /// cylinder a bounded number of times, and a range walk of a ray tree goes round at
+    /// most twice (more means the complex is inconsistent).
+    steps: usize,
+    ccw: bool,
+}
+
+/// Whether the clockwise position `a` comes strictly before `b` (`None`: θ = 2π, the first
+/// angle of its lap going clockwise).
+fn cw_before(a: (u8, Option<&KeyedAngle>), b: (u8, Option<&KeyedAngle>)) -> bool {
+    use core::cmp::Ordering;
+    a.0 < b.0
+        || (a.0 == b.0
+            && match (a.1, b.1) {
+                (Some(x), Some(y)) => x.cmp(y) == Ordering::Greater,
+                (None, Some(_)) => true,
+                (_, None) => false,
+            })
+}
+
+/// Whether the counter-clockwise position `a` comes strictly before `b`.
+#[inline]
+fn ccw_before(a: (u8, &KeyedAngle), b: (u8, &KeyedAngle)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1.cmp(b.1) == core::cmp::Ordering::Less)
+}
+
+impl Walker {
+    /// A walk of the trace of `q` from cylinder `cur` at angle `from` (lap 0), until `end`
+    /// (see the type's documentation for laps and `None`).
+    pub(crate) fn new(
+        q: QueryPoint,
+        anchor: Anchor,
+        cur: CylinderId,
+        from: Angle,
+        end: Option<Position>,
+        ccw: bool,
+    ) -> Walker {
+        Walker {
+            q,
+            anchor,
+            cur,
+            theta: from.keyed(),
+            full: false,
+            lap: 0,
+            end: end.map(|e| (e.lap, e.angle.keyed())),
+            cache: [(None, [(0, Bound::Lower); 2], 0); TANGENT_CACHE],
+            next_slot: 0,
+            steps: 0,
+            ccw,
+        }
+    }
+
+    /// A clockwise walk that starts at θ = 2π in `cur` (the cylinder just below it),
+    /// where no [`Angle`] can start it: every angle of its lap lies ahead.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    pub(crate) fn at_top(mut self) -> Walker {
+        self.full = !self.ccw;
+        self
+    }
+
+    /// The cylinder the walk is in now.
+    #[cfg(all(test, feature = "alloc"))]
+    pub(crate) fn cylinder(&self) -> CylinderId {
+        self.cur
+    }
+
+    /// The lap of the last event (or 0 at the start): how often the walk crossed the
+    /// permanent wall θ = 0.
+    pub(crate) fn lap(&self) -> u8 {
+        self.lap
+    }
+
+    /// The next event (one step), or `None` when the walk is over: θ reached `end`, or
+    /// the permanent wall without an `end`. After `None` or an error, the same again.
+    pub(crate) fn next_step<S: Storage>(
+        &mut self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+    ) -> Result<Option<Step>, WalkError> {
+        if self.ccw {
+            self.next_step_in::<S, true>(complex, scene)
+        } else {
+            self.next_step_in::<S, false>(complex, scene)
+        }
+    }
+
+    /// [`Walker::next_step`] in the direction `CCW` (which must be `self.ccw`), inlined
+    /// into `walk_from`'s loop: a call per step costs a view about 10 % more instructions.
+    #[inline(always)]
+    fn next_step_in<S: Storage, const CCW: bool>(
+        &mut self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+    ) -> Result<Option<Step>, WalkError> {
+        // Bounded by the events taken: a walk that ended (or failed) stays so, as the
+        // state does not change.
+        if self.steps >= 8 * complex.cylinders().len() + 8 {
+            return Err(WalkError::Corrupt);
+        }
+        let r = if CCW {
+            self.next_ccw(complex, scene)
+        } else {
+            self.next_cw(complex, scene)
+        };
+        if let Ok(Some(_)) = r {
+            self.steps += 1;
+        }
+        r
+    }
+
+    /// The tangents from `q` to `object`, through the cache.
+    #[inline]
+    fn tangents(&mut self, scene: &SceneRef<'_>, object: ObjectId) -> ([(usize, Bound); 2], usize) {
+        if let Some(&(_, t, n)) = self.cache.iter().find(|e| e.0 == Some(object)) {
+            return (t, n);
+        }
+        let (t, n) = crate::line_space::tangents_from(scene, object, self.q);
+        if let Some(slot) = self.cache.get_mut(self.next_slot % TANGENT_CACHE) {
+            *slot = (Some(object), t, n);
+        }
+        self.next_slot = self.next_slot.wrapping_add(1);
+        (t, n)
+    }
+
+    /// One counter-clockwise step: the first exit after θ.
+    #[inline(always)]
+    fn next_ccw<S: Storage>(
+        &mut self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+    ) -> Result<Option<Step>, WalkError> {
+        use core::cmp::Ordering;
+        let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
+        let lap = self.lap;
+        // The right wall, or a crossing of the bottom or top chain.
+        let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
+            // The permanent wall ends a full-circle walk; a range walk crosses it.
+            Wall::Zero => self
+                .end
+                .map(|_| (lap.saturating_add(1), Angle::ZERO.keyed(), None)),
+            w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
+        };
+        for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
+            let Some(chain) = chain else { continue };
+            if self.anchor == Anchor::Floor(chain.object) {
+                continue;
+            }
+            let (found, count) = self.tangents(scene, chain.object);
+            for &(h, bound) in found.iter().take(count) {
+                // `tangent_event` by hand: through the call a view costs 1 % more.
+                let forward = Angle::from_query(self.q, ranked(scene, h));
+                // The line q → h lies on `bound`; its reverse on the other chain.
+                let (a, ahead) = if bound == chain.bound {
+                    (forward.keyed(), true)
+                } else {
+                    (forward.reversed().keyed(), false)
+                };
+                if a.cmp(&self.theta) == Ordering::Greater
+                    && best
+                        .as_ref()
+                        .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
+                {
+                    let exit = ChainExit {
+                        chain,
+                        side,
+                        vertex: h,
+                        ahead,
+                    };
+                    best = Some((lap, a, Some(exit)));
+                }
+            }
+        }
+        let Some((l, angle, exit)) = best else {
+            return match self.end {
+                None => Ok(None), // θ reached 2π
+                Some(_) => Err(WalkError::Corrupt),
+            };
+        };
+        if let Some((e_lap, e_angle)) = &self.end {
+            if !ccw_before((l, &angle), (*e_lap, e_angle)) {
+                return Ok(None);
+            }
+        }
+        let next = match exit {
+            None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
+            Some(e) => self.cross(complex, scene, e, &angle.angle)?,
+        };
+        self.theta = angle;
+        self.lap = l;
+        self.cur = next;
+        Ok(Some(step_of(angle.angle, exit, next)))
+    }
+
+    /// One clockwise step: the last exit before θ (the mirror image of `next_ccw`).
+    #[inline]
+    fn next_cw<S: Storage>(
+        &mut self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+    ) -> Result<Option<Step>, WalkError> {
+        use core::cmp::Ordering;
+        let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
+        let lap = self.lap;
+        // The left wall, or a crossing of the bottom or top chain; `None` angle: θ = 2π
+        // on the next lap, past the permanent wall.
+        let mut best: Option<(u8, Option<KeyedAngle>, Option<ChainExit>)> = match c.left {
+            Wall::Zero => self.end.map(|_| (lap.saturating_add(1), None, None)),
+            w => complex
+                .wall_angle(scene, w)
+                .map(|a| (lap, Some(a.keyed()), None)),
+        };
+        for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
+            let Some(chain) = chain else { continue };
+            if self.anchor == Anchor::Floor(chain.object) {
+                continue;
+            }
+            let (found, count) = self.tangents(scene, chain.object);
+            for &(h, bound) in found.iter().take(count) {
+                let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
+                if (self.full || a.cmp(&self.theta) == Ordering::Less)
+                    && best
+                        .as_ref()
+                        .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
+                {
+                    let exit = ChainExit {
+                        chain,
+                        side,
+                        vertex: h,
+                        ahead,
+                    };
+                    best = Some((lap, Some(a), Some(exit)));
+                }
+            }
+        }
+        let Some((l, angle, exit)) = best else {
+            return match self.end {
+                None => Ok(None), // θ reached 0
+                Some(_) => Err(WalkError::Corrupt),
+            };
+        };
+        if let Some((e_lap, e_angle)) = &self.end {
+            if !cw_before((l, angle.as_ref()), (*e_lap, Some(e_angle))) {
+                return Ok(None);
+            }
+        }
+        let next = match (exit, &angle) {
+            (None, _) => c.left_neighbour.ok_or(WalkError::Corrupt)?,
+            (Some(e), Some(a)) => self.cross(complex, scene, e, &a.angle)?,
+            // A chain crossing always has an angle.
+            (Some(_), None) => return Err(WalkError::Corrupt),
+        };
+        self.full = angle.is_none();
+        let at = angle.map_or(Angle::ZERO, |a| a.angle);
+        self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
+        self.lap = l;
+        self.cur = next;
+        Ok(Some(step_of(at, exit, next)))
+    }
+
+    /// The cylinder entered leaving the current one across a chain at `angle` (strictly
+    /// inside its θ-range, so the same in both directions).
+    #[inline(always)]
+    fn cross<S: Storage>(
+        &self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+        exit: ChainExit,
+        angle: &Angle,
+    ) -> Result<CylinderId, WalkError> {
+        let ChainExit {
+            chain, side, ahead, ..
+        } = exit;
+        // Lines on the far side of a lower chain cross the object iff that side is above
+        // it; of an upper chain iff it is below.
+        let crossed = match chain.bound {
+            Bound::Lower => Side::Above,
+            Bound::Upper => Side::Below,
+        };
+        let layer = if side != crossed {
+            Layer::Around
+        } else if ahead || matches!(self.anchor, Anchor::Floor(_)) {
+            // Point: h ahead of q, so the segment through q ends at the object.
+            // Floor(m): the object appears between m and the old ceiling.
+            Layer::Before
+        } else {
+            Layer::After
+        };
+        // The entered cylinder overlaps the one left: scan the far side from there
+        // (usually a step or two) instead of bisecting the tiling.
+        let next = complex
+            .across_from(scene, self.cur, side, layer, angle)
+            .ok_or(WalkError::Corrupt)?;
+        if let Anchor::Floor(m) = self.anchor {
+            if complex.cylinder(next).and_then(|n| n.floor) != Some(m) {
+                return Err(WalkError::Corrupt);
+            }
+        }
+        Ok(next)
+    }
+}
+
+/// The crossing of `chain` by the trace of `q` where it is tangent to the chain's object
+/// at vertex `h` (a tangent from `q` on `bound`): its angle, and whether `h` lies ahead.
+#[inline]
+fn tangent_event(
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    h: usize,
+    bound: Bound,
+    chain: Chain,
+) -> (KeyedAngle, bool) {
+    let forward = Angle::from_query(q, ranked(scene, h));
+    // The line q → h lies on `bound`; its reverse on the other chain.
+    if bound == chain.bound {
+        (forward.keyed(), true)
+    } else {
+        (forward.reversed().keyed(), false)
+    }
+}
+
+/// The step entering `cylinder` at `angle` across `exit` (`None`: a secondary wall).
+#[inline]
+fn step_of(angle: Angle, exit: Option<ChainExit>, cylinder: CylinderId) -> Step {
+    let (vertex, ahead) = exit.map_or((None, false), |e| (Some(e.vertex), e.ahead));
+    Step {
+        angle,
+        vertex,
+        ahead,
+        cylinder,
+    }
+}
+
+#[cfg(all(test, feature = "alloc"))]
+mod tests {
+    use alloc::vec::Vec;
+    use core::cmp::Ordering;
+
+    use super::*;
+    use crate::geom::Point;
+    use crate::partition::{build_by_sweep, Complex};
+    use crate::scene::{Material, Scene};
+
+    /// A small deterministic generator (Knuth's MMIX LCG).
+    struct Lcg(u64);
+
+    impl Lcg {
+        /// Uniform in `0..n`.
+        fn below(&mut self, n: u32) -> i32 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((self.0 >> 33) % u64::from(n)) as i32
+        }
+    }
+
+    fn p(x: i32, y: i32) -> Point {
+        Point::from_raw(x << 16, y << 16).unwrap()
+    }
+
+    /// One convex object per cell of a `k × k` grid of 8-unit cells (a few cells empty),
+    /// integer corners strictly inside the cell, so objects are disjoint: boxes and
+    /// triangles, many sharing coordinates (collinear vertices, equal heights).
+    fn random_scene(seed: u64, k: i32) -> Scene {
+        let mut rng = Lcg(seed);
+        let mut polys: Vec<Vec<Point>> = Vec::new();
+        for i in 0..k {
+            for j in 0..k {
+                let (x0, y0) = (8 * i, 8 * j);
+                match rng.below(4) {
+                    0 => {}
+                    1 => {
+                        let (a, b) = (x0 + 1 + rng.below(3), y0 + 1 + rng.below(3));
+                        let (c, d) = (x0 + 4 + rng.below(3), y0 + 4 + rng.below(3));
+                        polys.push(alloc::vec![p(a, b), p(c, b), p(c, d), p(a, d)]);
+                    }
+                    _ => loop {
+                        let mut q = || (x0 + 1 + rng.below(7), y0 + 1 + rng.below(7));
+                        let (a, b, c) = (q(), q(), q());
+                        let cross = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+                        if cross != 0 {
+                            polys.push(alloc::vec![p(a.0, a.1), p(b.0, b.1), p(c.0, c.1)]);
+                            break;
+                        }
+                    },
+                }
+            }
+        }
+        Scene::new(polys.iter().map(|v| (Material::Opaque, v.as_slice()))).unwrap()
+    }
+
+    /// The boxes of `walk::tree`'s tests: few objects, long events.
+    fn boxes() -> Scene {
+        let r = |x0, y0, x1, y1| alloc::vec![p(x0, y0), p(x1, y0), p(x1, y1), p(x0, y1)];
+        let polys = [r(-6, -2, -4, 1), r(4, -1, 6, 2), r(-3, -7, 3, -5)];
+        Scene::new(polys.iter().map(|v| (Material::Opaque, v.as_slice()))).unwrap()
+    }
+
+    /// Viewpoints: integer points on the heights of vertices (events exactly at θ = 0
+    /// and π, and collinear with vertices), half-integer and random fine-grid points.
+    fn viewpoints(scene: &Scene, seed: u64, count: usize) -> Vec<QueryPoint> {
+        let s = scene.as_ref();
+        let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+        for v in s.vertices() {
+            let (x, y) = (v.x() >> 16, v.y() >> 16);
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        let (w, h) = ((hi.0 - lo.0 + 3) as u32, (hi.1 - lo.1 + 3) as u32);
+        let mut rng = Lcg(seed);
+        let mut out = Vec::new();
+        let unit = 1i64 << 32;
+        for k in 0..count {
+            let q = match k % 3 {
+                0 => {
+                    let vs = s.vertices();
+                    let v = vs[rng.below(vs.len() as u32) as usize];
+                    let x = i64::from(lo.0 - 1 + rng.below(w));
+                    QueryPoint::from_raw(x * unit, i64::from(v.y() >> 16) * unit)
+                }
+                1 => {
+                    let x = i64::from(lo.0 - 1 + rng.below(w));
+                    let y = i64::from(lo.1 - 1 + rng.below(h));
+                    QueryPoint::from_raw(x * unit + unit / 2, y * unit + unit / 2)
+                }
+                _ => {
+                    let x = i64::from(lo.0 - 1) * unit + i64::from(rng.below(w << 8)) * (unit >> 8);
+                    let y = i64::from(lo.1 - 1) * unit
+                        + i64::from(rng.below(h << 8)) * (unit >> 8)
+                        + i64::from(rng.below(1 << 20));
+                    QueryPoint::from_raw(x, y)
+                }
+            };
+            out.extend(q);
+        }
+        out
+    }
+
+    /// The steps of a walker until it ends.
+    fn run(c: &Complex, s: &SceneRef<'_>, w: &mut Walker) -> Vec<Step> {
+        let mut out = Vec::new();
+        while let Some(st) = w.next_step(c, s).unwrap() {
+            out.push(st);
+        }
+        assert!(
+            w.next_step(c, s).unwrap().is_none(),
+            "a finished walk stays finished"
+        );
+        out
+    }
+
+    /// `cw` is `ccw` backwards: the same events (angle, vertex, ahead) in reverse order,
+    /// each entering the cylinder the ccw walk left there (`left[k]` before `ccw[k]`).
+    fn assert_reversed(cw: &[Step], ccw: &[Step], left: &[CylinderId]) {
+        assert_eq!(cw.len(), ccw.len(), "event counts");
+        for ((a, b), l) in cw.iter().zip(ccw.iter().rev()).zip(left.iter().rev()) {
+            assert_eq!(
+                a.angle.cmp_angle(&b.angle),
+                Ordering::Equal,
+                "{a:?} vs {b:?}"
+            );
+            assert_eq!((a.vertex, a.ahead), (b.vertex, b.ahead), "{a:?} vs {b:?}");
+            assert_eq!(a.cylinder, *l, "{a:?} vs {b:?}");
+        }
+    }
+
+    /// Every clockwise walk checked against the counter-clockwise `walk_trace` of the same
+    /// viewpoint: the full circle from the θ = 0 start cylinder, range walks between event
+    /// angles (also across θ = 0), the counter-clockwise [`Walker`] itself, and anchored
+    /// walks both ways. Returns the number of viewpoints walked (free ones), of those with
+    /// events exactly at θ = 0 or π, and of anchored walks checked.
+    fn check_scene(scene: &Scene, seed: u64, count: usize) -> (usize, usize, usize) {
+        let s = scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let mut rng = Lcg(seed ^ 0x9e37_79b9);
+        let (mut walked, mut exact, mut anchored) = (0, 0, 0);
+        let horizontal = [Angle::ZERO, Angle::ZERO.reversed()];
+        for q in viewpoints(scene, seed, count) {
+            let mut ccw = Vec::new();
+            match c.walk_trace(&s, q, |st| ccw.push(*st)) {
+                Ok(()) => {}
+                Err(WalkError::NotFree(_)) => continue,
+                Err(e) => panic!("walk_trace from {q:?}: {e:?}"),
+            }
+            walked += 1;
+            exact += usize::from(ccw[1..].iter().any(|st| {
+                horizontal
+                    .iter()
+                    .any(|h| st.angle.cmp_exact(h) == Ordering::Equal)
+            }));
+            // ccw[0] is the start cylinder (θ = 0), ccw[i] the i-th event.
+            let n = ccw.len() - 1;
+            let cyl: Vec<CylinderId> = ccw.iter().map(|st| st.cylinder).collect();
+            let last = cyl[n];
+
+            // Full circle, clockwise: across the permanent wall into the last cylinder of
+            // the ccw walk, then every event back to θ = 0.
+            let full = Position {
+                lap: 1,
+                angle: Angle::ZERO,
+            };
+            let mut w = Walker::new(q, Anchor::Point, cyl[0], Angle::ZERO, Some(full), false);
+            let cw = run(&c, &s, &mut w);
+            assert!(!cw.is_empty(), "from {q:?}");
+            assert_eq!(cw[0].vertex, None, "from {q:?}");
+            assert_eq!(cw[0].angle.cmp_angle(&Angle::ZERO), Ordering::Equal);
+            assert_eq!(cw[0].cylinder, last, "from {q:?}: across θ = 0");
+            assert_reversed(&cw[1..], &ccw[1..], &cyl[..n]);
+            assert_eq!(w.cylinder(), cyl[0]);
+
+            // The counter-clockwise walker is `walk_trace`.
+            let mut w = Walker::new(q, Anchor::Point, cyl[0], Angle::ZERO, None, true);
+            let again = run(&c, &s, &mut w);
+            assert_eq!(again.len(), n);
+            for (a, b) in again.iter().zip(&ccw[1..]) {
+                assert_eq!(a.angle.cmp_angle(&b.angle), Ordering::Equal);
+                assert_eq!((a.vertex, a.cylinder), (b.vertex, b.cylinder));
+            }
+
+            if n < 2 {
+                continue;
+            }
+            for _ in 0..4 {
+                // Clockwise from inside cylinder `cyl[j]` (at its ccw exit angle
+                // `ccw[j + 1]`) down to the event `ccw[i]`, i ≤ j < n: the events
+                // `ccw[i + 1..=j]` backwards; `i = 0` ends at θ = 0.
+                let j = rng.below(n as u32) as usize;
+                let i = rng.below(j as u32 + 1) as usize;
+                let (hi, lo) = (ccw[j + 1].angle, ccw[i].angle);
+                let end = Position { lap: 0, angle: lo };
+                let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
+                let cw = run(&c, &s, &mut w);
+                assert_reversed(&cw, &ccw[i + 1..=j], &cyl[i..j]);
+                assert_eq!(w.cylinder(), cyl[i]);
+                if i == 0 {
+                    let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, None, false);
+                    assert_eq!(run(&c, &s, &mut w).len(), j);
+                }
+                // The same range counter-clockwise (`walk_from`, as ray trees use it).
+                let mut fwd = Vec::new();
+                let end = Position { lap: 0, angle: hi };
+                c.walk_from(&s, q, Anchor::Point, cyl[i], lo, Some(end), &mut |st| {
+                    fwd.push(*st)
+                })
+                .unwrap();
+                assert_eq!(fwd.len(), j - i);
+                for (a, b) in fwd.iter().zip(&ccw[i + 1..=j]) {
+                    assert_eq!(a.angle.cmp_angle(&b.angle), Ordering::Equal);
+                    assert_eq!((a.vertex, a.cylinder), (b.vertex, b.cylinder));
+                }
+
+                // Clockwise across θ = 0: from inside `cyl[j]` down to θ = 0, over the
+                // permanent wall into `last`, and on down to the event `ccw[k]`, k > j + 1.
+                if j + 2 <= n {
+                    let k = j + 2 + rng.below((n - j - 1) as u32) as usize;
+                    let end = Position {
+                        lap: 1,
+                        angle: ccw[k].angle,
+                    };
+                    let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
+                    let cw = run(&c, &s, &mut w);
+                    assert_eq!(cw.len(), j + 1 + (n - k), "from {q:?}");
+                    assert_reversed(&cw[..j], &ccw[1..=j], &cyl[..j]);
+                    assert_eq!((cw[j].vertex, cw[j].cylinder), (None, last));
+                    assert_reversed(&cw[j + 1..], &ccw[k + 1..], &cyl[k..n]);
+                    assert_eq!(w.cylinder(), cyl[k]);
+                }
+            }
+
+            // Anchored to a floor M: counter-clockwise from a cylinder of the trace with
+            // floor M at its entry angle, up to the next tangent from `q` to M (the lines
+            // through `q` cross M up to there: the trace stays in M's sheet), then
+            // clockwise back from that angle.
+            for i in 1..n {
+                let Some(m) = c.cylinder(cyl[i]).and_then(|x| x.floor) else {
+                    continue;
+                };
+                // The next direction after `lo` in which the line through `q` is tangent
+                // to M (the point walk may not see it: M hidden behind another object).
+                let lo = ccw[i].angle;
+                let (t, count) = crate::line_space::tangents_from(&s, m, q);
+                let hi = t
+                    .iter()
+                    .take(count)
+                    .flat_map(|&(h, _)| {
+                        let a = Angle::from_query(q, ranked(&s, h));
+                        [a, a.reversed()]
+                    })
+                    .filter(|a| a.cmp_angle(&lo) == Ordering::Greater)
+                    .min_by(|a, b| a.cmp_angle(b));
+                let Some(hi) = hi else { continue };
+                let anchor = Anchor::Floor(m);
+                let end = Position { lap: 0, angle: hi };
+                let mut w = Walker::new(q, anchor, cyl[i], lo, Some(end), true);
+                let fwd = run(&c, &s, &mut w);
+                let mut entered: Vec<CylinderId> = alloc::vec![cyl[i]];
+                entered.extend(fwd.iter().map(|st| st.cylinder));
+                for st in &fwd {
+                    let f = c.cylinder(st.cylinder).and_then(|x| x.floor);
+                    assert_eq!(f, Some(m), "from {q:?}: left the sheet of {m:?}");
+                }
+                let end = Position { lap: 0, angle: lo };
+                let mut w = Walker::new(q, anchor, w.cylinder(), hi, Some(end), false);
+                let back = run(&c, &s, &mut w);
+                assert_reversed(&back, &fwd, &entered[..fwd.len()]);
+                assert_eq!(w.cylinder(), cyl[i]);
+                anchored += usize::from(!fwd.is_empty());
+            }
+        }
+        (walked, exact, anchored)
+    }
+
+    #[test]
+    fn clockwise_walks_reverse_the_counter_clockwise_trace() {
+        let (walked, exact, anchored) = check_scene(&boxes(), 1, 90);
+        assert!(
+            walked > 40 && exact > 10 && anchored > 20,
+            "{walked} {exact} {anchored}"
+        );
+        for seed in 1..=12 {
+            let k = 2 + (seed as i32 % 3);
+            let scene = random_scene(seed, k);
+            let (walked, exact, anchored) = check_scene(&scene, seed, 150);
+            let counts = (walked, exact, anchored);
+            assert!(
+                walked > 60 && exact > 20 && anchored > 60,
+                "seed {seed}: {counts:?}"
+            );
+        }
+    }
+
+    /// The step bound is kept across calls: a walk whose end it never reaches (laps
+    /// round and round, both ways) errs `Corrupt` after `8 · cylinders + 8` steps, and
+    /// stays failed.
+    #[test]
+    fn a_walk_that_does_not_end_is_corrupt() {
+        let scene = boxes();
+        let s = scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let q = QueryPoint::from_f64(0.5, 0.25).unwrap();
+        let mut start = None;
+        c.walk_trace(&s, q, |st| {
+            start.get_or_insert(st.cylinder);
+        })
+        .unwrap();
+        // Going round and round: an end on a lap no walk reaches within the bound.
+        let end = Position {
+            lap: u8::MAX,
+            angle: Angle::ZERO,
+        };
+        for ccw in [true, false] {
+            let mut w = Walker::new(
+                q,
+                Anchor::Point,
+                start.unwrap(),
+                Angle::ZERO,
+                Some(end),
+                ccw,
+            );
+            let mut steps = 0;
+            let err = loop {
+                match w.next_step(&c, &s) {
+                    Ok(Some(_)) => steps += 1,
+                    Ok(None) => panic!("ended after {steps} steps"),
+                    Err(e) => break e,
+                }
+            };
+            assert_eq!(err, WalkError::Corrupt);
+            assert_eq!(steps, 8 * c.cylinders().len() + 8);
+            assert_eq!(w.next_step(&c, &s).unwrap_err(), WalkError::Corrupt);
+        }
     }
 }

@@ -12,7 +12,9 @@
 //!   point timed as the best of R repetitions), views per second, mean events of the
 //!   primary walk (cylinders entered) and intervals per view. One JSON object. With
 //!   `--fov DEG [--heading DEG] [--width W]` each measurement is a frame of W columns: the
-//!   same sweep plus per-column hits (`render::centre_hits`: each column's centre interval
+//!   ray tree over the field of view walked in lock step without allocating
+//!   (`walk::frame_tree_into` into a reused scratch and buffer of `render::FrameInterval`s,
+//!   as a device does) plus per-column hits (`render::centre_hits`: each column's centre interval
 //!   and the distance along its branch, one `render::Hits` for the frame) and
 //!   exact per-column coverage (`render::coverage`); adds `us_per_frame`.
 //!
@@ -24,7 +26,8 @@ use std::time::Instant;
 
 use serde_json::json;
 use vcx::partition::{build_by_sweep, BuildOptions, Complex, Cylinder, History};
-use vcx::render::{centre_hits, coverage, Camera, Interval};
+use vcx::render::{centre_hits, coverage, Camera, FrameInterval, Interval};
+use vcx::walk::{frame_tree_into, TreeScratch, WalkError};
 use vcx::{Material, ObjectId, QueryPoint, SubScene};
 
 use super::{write_stdout, Failure};
@@ -350,6 +353,7 @@ pub(crate) fn measure_views(
         Points::Random(k, seed) => random_points(&scene, *k, *seed),
     };
     let width = frame.map_or(0, |f| f.width);
+    let mut tree = Box::new(TreeScratch::<64>::new());
     let mut times = Vec::with_capacity(points.len());
     let (mut events, mut boundaries, mut used) = (0usize, 0usize, 0usize);
     for &q in &points {
@@ -364,26 +368,39 @@ pub(crate) fn measure_views(
             None => None,
         };
         let mut columns = vec![0usize; width];
+        let mut kept: Vec<FrameInterval> = Vec::new();
         let mut count = || -> Result<usize, Failure> {
             Ok(if depth == 0 {
                 let v = vcx::walk::view(&complex, &scene, q).map_err(internal)?;
                 self::frame(&scene, camera.as_ref(), &v, &mut columns);
                 v.len()
             } else {
-                // A frame walks the ray tree over its field of view only.
-                let t = match &camera {
+                match &camera {
+                    // A frame walks the ray tree over its field of view only, in lock step
+                    // without allocating, as a device does: the scratch and the buffer of
+                    // intervals are reused from frame to frame.
                     Some(cam) => {
                         let (from, to) = cam.range();
-                        vcx::walk::frame_tree(&complex, &scene, q, depth, from, to).map(|mut t| {
-                            vcx::render::angle_order(&mut t);
-                            t
+                        kept.clear();
+                        let mut fits = true;
+                        frame_tree_into(&complex, &scene, q, depth, from, to, &mut tree, |i| {
+                            match FrameInterval::new(&i) {
+                                Some(f) => kept.push(f),
+                                None => fits = false,
+                            }
                         })
+                        .map_err(internal)?;
+                        if !fits {
+                            return Err(internal(WalkError::TreeTooDeep));
+                        }
+                        vcx::render::angle_order(&mut kept);
+                        self::frame(&scene, camera.as_ref(), &kept, &mut columns);
+                        kept.len()
                     }
-                    None => vcx::walk::ray_tree(&complex, &scene, q, depth),
+                    None => vcx::walk::ray_tree(&complex, &scene, q, depth)
+                        .map_err(internal)?
+                        .len(),
                 }
-                .map_err(internal)?;
-                self::frame(&scene, camera.as_ref(), &t, &mut columns);
-                t.len()
             })
         };
         let mut best = f64::INFINITY;
