@@ -9,6 +9,12 @@
 //! with `Complex::from_slices`, and [`views`] walks the view from each viewpoint of
 //! `viewpoints.rs` (generated, as the `.vcx` is, and checked for staleness by the host
 //! test). The buffer sizes are the file's header counts, read at compile time.
+//!
+//! [`trees`] then walks a ray-tree frame from each viewpoint: a camera of [`COLUMNS`]
+//! columns and a 90° field of view along [`heading`], the tree of depth [`TREE_DEPTH`]
+//! streamed by `walk::frame_tree_into` through a [`TreeRam`] (the generations in lock step)
+//! into a [`Frame`] of `render::FrameInterval`s, put in start-angle order and covered
+//! column by column (`render::coverage`).
 
 use vcx::format::{self, Decoded, FormatError, SceneObject, Scratch};
 use vcx::geom::sos::Angle;
@@ -17,7 +23,8 @@ use vcx::line_space::{Bound, Chain};
 use vcx::partition::{
     BorderBuffers, BorderSizes, BufferTooSmall, Complex, Cylinder, CylinderId, Slices, Vertex,
 };
-use vcx::walk::{view_capacity, view_into, ViewInterval, WalkError};
+use vcx::render::{angle_order, coverage, Camera, FrameInterval, RenderError};
+use vcx::walk::{frame_tree_into, view_capacity, view_into, TreeScratch, ViewInterval, WalkError};
 use vcx::{ObjectId, SceneRef};
 
 use crate::viewpoints::VIEWPOINTS;
@@ -163,6 +170,12 @@ pub enum Error {
     Viewpoint(usize),
     /// A static buffer was taken twice.
     Taken,
+    /// The camera of a ray-tree frame could not be made.
+    Camera(RenderError),
+    /// A ray-tree frame has more intervals than [`FRAME_CAPACITY`].
+    FrameFull,
+    /// A ray-tree interval's branch is longer than `render::MAX_BRANCH`.
+    BranchTooLong,
 }
 
 /// Decodes and checks `bytes` (the embedded [`VCX`] on the device) into `arenas`: the
@@ -216,6 +229,90 @@ pub fn views(
             checksum = checksum.rotate_left(5) ^ object;
         }
         each(k, view);
+    }
+    Ok(checksum)
+}
+
+/// Depth of the ray trees: four bounces. The hall's four walls are mirrors, so nearly every
+/// ray is reflected to the full depth, and the intervals of a frame multiply with it (see
+/// [`FRAME_CAPACITY`]).
+pub const TREE_DEPTH: usize = 4;
+
+/// Frames of the tree walk's stack: the primary walk, then two per level for a mirror (its
+/// split and the reflected walk). The hall has mirrors and opaque objects only — no
+/// refraction (three per level), no screens (one each) — so `1 + 2·depth` suffices where
+/// `TreeScratch`'s general rule is `3·depth + 4`; a file that needs more is a
+/// `WalkError::TreeTooDeep`, and the host test checks that one frame fewer is too few.
+pub const TREE_FRAMES: usize = 2 * TREE_DEPTH + 1;
+
+/// The ray tree's working memory.
+pub type TreeRam = TreeScratch<TREE_FRAMES>;
+
+/// Columns of a frame.
+pub const COLUMNS: usize = 64;
+
+/// Field of view of a frame: 90°.
+pub const FOV: f64 = core::f64::consts::FRAC_PI_2;
+
+/// Intervals a frame holds: the six frames have at most 83, a frame of any heading (every
+/// 5°) from the six viewpoints at most 104 (`firmware_trees_match_owned_frame_tree` prints
+/// both and checks the second against this). Their number grows by about 15 per level of
+/// depth here; a frame with more is [`Error::FrameFull`].
+pub const FRAME_CAPACITY: usize = 128;
+
+/// The intervals of a ray-tree frame.
+pub type Frame = heapless::Vec<FrameInterval, FRAME_CAPACITY>;
+
+/// The heading of the camera at viewpoint `k`, in radians: a sixth of a turn apart, so the
+/// six frames look every way.
+pub fn heading(k: usize) -> f64 {
+    0.25 + k as f64 * (core::f64::consts::TAU / 6.0)
+}
+
+/// Walks the ray-tree frame from every embedded viewpoint ([`heading`], [`FOV`],
+/// [`COLUMNS`], [`TREE_DEPTH`]) into `frame`, in start-angle order, and covers its columns;
+/// calls `each` with the viewpoint's index, its camera, its intervals and the sum of the
+/// coverage fractions (one per column). Returns a checksum of the branches and the pieces.
+#[inline(never)]
+pub fn trees(
+    complex: &Complex<Slices<'_>>,
+    scene: &SceneRef<'_>,
+    scratch: &mut TreeRam,
+    frame: &mut Frame,
+    mut each: impl FnMut(usize, &Camera, &[FrameInterval], f64),
+) -> Result<u32, Error> {
+    let mut checksum = 0u32;
+    for (k, &(x, y)) in VIEWPOINTS.iter().enumerate() {
+        let q = QueryPoint::from_raw(x, y).ok_or(Error::Viewpoint(k))?;
+        let camera = Camera::new(q, heading(k), FOV, COLUMNS).map_err(Error::Camera)?;
+        let (from, to) = camera.range();
+        frame.clear();
+        // The first failure to keep a span; the walk runs on (it cannot be stopped from
+        // here), keeping nothing more.
+        let mut kept = Ok(());
+        frame_tree_into(complex, scene, q, TREE_DEPTH, from, to, scratch, |span| {
+            if kept.is_ok() {
+                kept = match FrameInterval::new(&span) {
+                    Some(i) => frame.push(i).map_err(|_| Error::FrameFull),
+                    None => Err(Error::BranchTooLong),
+                };
+            }
+        })
+        .map_err(Error::Walk)?;
+        kept?;
+        angle_order(frame.as_mut_slice());
+        for i in frame.iter() {
+            for o in &i.branch {
+                checksum = checksum.rotate_left(5) ^ o.0;
+            }
+            checksum = checksum.rotate_left(5) ^ 0xffff;
+        }
+        let mut covered = 0.0;
+        coverage(&camera, frame, |p| {
+            covered += p.fraction;
+            checksum = checksum.rotate_left(5) ^ ((p.column as u32) << 16 | p.interval as u32);
+        });
+        each(k, &camera, frame, covered);
     }
     Ok(checksum)
 }

@@ -55,7 +55,12 @@ pub fn above(sp: usize) -> u32 {
 
 /// Prints the stack high-water marks and the result on the MPS2's UART0 (CMSDK APB UART).
 #[cfg(feature = "qemu")]
-pub fn report(main: u32, setup: u32, walk: u32, result: &Result<u32, crate::app::Error>) {
+pub fn report(
+    main: u32,
+    [setup, walk, trees]: [u32; 3],
+    views: &Result<u32, crate::app::Error>,
+    frames: &Result<u32, crate::app::Error>,
+) {
     use core::fmt::Write;
     struct Uart;
     const UART0: usize = 0x4000_4000;
@@ -80,7 +85,8 @@ pub fn report(main: u32, setup: u32, walk: u32, result: &Result<u32, crate::app:
     let _ = writeln!(
         Uart,
         "vcx-firmware: size_of Angle {} B, ViewInterval {} B, Cylinder {} B, Vertex {} B, \
-         Arenas {} B, Ram {} B, Out {} B",
+         Arenas {} B, Ram {} B, Out {} B, FrameInterval {} B, TreeRam ({} frames) {} B, \
+         Frame ({} intervals) {} B",
         size_of::<vcx::geom::sos::Angle>(),
         size_of::<vcx::walk::ViewInterval>(),
         size_of::<vcx::partition::Cylinder>(),
@@ -88,10 +94,15 @@ pub fn report(main: u32, setup: u32, walk: u32, result: &Result<u32, crate::app:
         size_of::<crate::app::Arenas>(),
         size_of::<crate::app::Ram>(),
         size_of::<crate::app::Out>(),
+        size_of::<vcx::render::FrameInterval>(),
+        crate::app::TREE_FRAMES,
+        size_of::<crate::app::TreeRam>(),
+        crate::app::FRAME_CAPACITY,
+        size_of::<crate::app::Frame>(),
     );
     let _ = writeln!(
         Uart,
-        "vcx-firmware: stack: main {main} B, below it setup {setup} B, view walks {walk} B; \
-         checksum {result:?}"
+        "vcx-firmware: stack: main {main} B, below it setup {setup} B, view walks {walk} B, \
+         ray-tree frames {trees} B; checksums: views {views:?}, frames {frames:?}"
     );
 }

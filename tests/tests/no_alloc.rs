@@ -15,7 +15,9 @@
 //!   `cargo test -p vcx-tests --test no_alloc -- --ignored regenerate_firmware_data`.
 //! * `firmware/src/app.rs` is included here verbatim and run on the same bytes (decoding,
 //!   rebuild, views, counted by the allocator): its views are compared with `walk::view`
-//!   on the owned complex and with the exact reference.
+//!   on the owned complex and with the exact reference, and its ray-tree frames (depth 4
+//!   through the hall's mirrors, 90°, 64 columns) with `walk::frame_tree` on the owned
+//!   complex, interval by interval and piece by piece of the coverage.
 
 mod common;
 
@@ -392,6 +394,149 @@ fn firmware_walk_matches_owned_view_and_reference() {
         compared += 1;
     }
     assert_eq!(compared, VIEWPOINT_COUNT);
+}
+
+/// The firmware's ray-tree frames (`app::trees`: `frame_tree_into` through its
+/// `TreeScratch`, kept in its fixed-capacity `Frame`, `angle_order`, `coverage`) allocate
+/// nothing on the embedded bytes, and every frame equals `walk::frame_tree` of the owned
+/// complex built by the sweep (which `tests/tests/ray_trees.rs` checks against the exact
+/// reference) with the same camera: the same intervals (branch, start bits) in the same
+/// order, and the same coverage, which covers each column once. The frames reach the full
+/// depth, so the scratch's `1 + 2·depth` frames are needed: one fewer is `TreeTooDeep`.
+#[test]
+fn firmware_trees_match_owned_frame_tree() {
+    use vcx::render::{angle_order, coverage, Camera, FrameInterval, Piece};
+    use vcx::walk::{frame_tree, frame_tree_into, TreeScratch};
+    let _g = lock();
+    let mut arenas = Box::new(app::Arenas::new());
+    let mut ram = Box::new(app::Ram::new());
+    let mut scratch = Box::new(app::TreeRam::new());
+    let mut frame = Box::new(app::Frame::new());
+    let k_max = viewpoints::VIEWPOINTS.len();
+    // Results are copied into preallocated storage, so the callback allocates nothing.
+    let mut got: Vec<(Vec<FrameInterval>, Vec<Piece>, f64)> = (0..k_max)
+        .map(|_| {
+            (
+                Vec::with_capacity(app::FRAME_CAPACITY),
+                Vec::with_capacity(4 * app::FRAME_CAPACITY + app::COLUMNS),
+                0.0,
+            )
+        })
+        .collect();
+    let file = app::decode(app::VCX, &mut arenas).expect("decode_into");
+    let s = file.scene.as_ref();
+    let complex = app::complex(&s, file.vertices, file.cylinders, &mut ram).expect("rebuild");
+    let (n, checksum) = allocations(|| {
+        for g in got.iter_mut() {
+            g.0.clear();
+            g.1.clear();
+        }
+        app::trees(
+            &complex,
+            &s,
+            &mut scratch,
+            &mut frame,
+            |k, camera, f, sum| {
+                if let Some(g) = got.get_mut(k) {
+                    g.0.extend_from_slice(f);
+                    coverage(camera, f, |p| {
+                        if g.1.len() < g.1.capacity() {
+                            g.1.push(p)
+                        }
+                    });
+                    g.2 = sum;
+                }
+            },
+        )
+    });
+    assert_eq!(n, 0, "the firmware's ray-tree frames allocated");
+    checksum.expect("firmware trees");
+
+    let owned = build_by_sweep(&s).expect("build");
+    let mut most = 0;
+    let mut deepest = 0;
+    for (k, &(x, y)) in viewpoints::VIEWPOINTS.iter().enumerate() {
+        let q = QueryPoint::from_raw(x, y).expect("in range");
+        let camera = Camera::new(q, app::heading(k), app::FOV, app::COLUMNS).expect("camera");
+        let (from, to) = camera.range();
+        let mut want = frame_tree(&owned, &s, q, app::TREE_DEPTH, from, to).expect("owned tree");
+        angle_order(&mut want);
+        let (g, pieces, sum) = &got[k];
+        assert_eq!(g.len(), want.len(), "viewpoint {k}");
+        for (a, b) in g.iter().zip(&want) {
+            assert_eq!(a.branch.as_slice(), b.branch.as_slice(), "viewpoint {k}");
+            assert_eq!(a.start.to_bits(), b.start.to_bits(), "viewpoint {k}");
+            let exact = match (&a.exact_start, &b.exact_start) {
+                (Some(x), Some(y)) => x.cmp_angle(y) == core::cmp::Ordering::Equal,
+                (x, y) => x.is_none() && y.is_none(),
+            };
+            assert!(exact, "viewpoint {k}: exact starts differ");
+        }
+        let mut want_pieces = Vec::new();
+        coverage(&camera, &want, |p| want_pieces.push(p));
+        assert_eq!(pieces, &want_pieces, "viewpoint {k}");
+        let want_sum: f64 = want_pieces.iter().map(|p| p.fraction).sum();
+        assert_eq!(sum.to_bits(), want_sum.to_bits(), "viewpoint {k}");
+        let mut per_column = vec![0.0; app::COLUMNS];
+        for p in &want_pieces {
+            per_column[p.column] += p.fraction;
+        }
+        for (c, f) in per_column.iter().enumerate() {
+            assert!((f - 1.0).abs() < 1e-9, "viewpoint {k} column {c}: {f}");
+        }
+        most = most.max(want.len());
+        deepest = deepest.max(want.iter().map(|i| i.branch.len()).max().unwrap_or(0));
+    }
+
+    // The capacity holds the frame of any heading from these viewpoints (every 5°), not
+    // only the six the firmware walks.
+    let mut any_heading = 0;
+    for &(x, y) in viewpoints::VIEWPOINTS.iter() {
+        let q = QueryPoint::from_raw(x, y).expect("in range");
+        for h in 0..72 {
+            let heading = f64::from(h) * core::f64::consts::TAU / 72.0;
+            let camera = Camera::new(q, heading, app::FOV, app::COLUMNS).expect("camera");
+            let (from, to) = camera.range();
+            let tree = frame_tree(&owned, &s, q, app::TREE_DEPTH, from, to).expect("owned tree");
+            any_heading = any_heading.max(tree.len());
+        }
+    }
+    println!(
+        "firmware ray-tree frames: at most {most} intervals ({any_heading} over all headings, \
+         capacity {}), branches up to {deepest} objects",
+        app::FRAME_CAPACITY
+    );
+    assert_eq!(
+        deepest,
+        app::TREE_DEPTH + 1,
+        "the trees reach the full depth"
+    );
+    assert!(
+        any_heading <= app::FRAME_CAPACITY,
+        "{any_heading} intervals"
+    );
+
+    // One frame fewer than the firmware's scratch is too few for some viewpoint, and says so.
+    let mut small = Box::new(TreeScratch::<{ app::TREE_FRAMES - 1 }>::new());
+    let too_deep = viewpoints::VIEWPOINTS
+        .iter()
+        .enumerate()
+        .any(|(k, &(x, y))| {
+            let q = QueryPoint::from_raw(x, y).expect("in range");
+            let camera = Camera::new(q, app::heading(k), app::FOV, app::COLUMNS).expect("camera");
+            let (from, to) = camera.range();
+            frame_tree_into(
+                &complex,
+                &s,
+                q,
+                app::TREE_DEPTH,
+                from,
+                to,
+                &mut small,
+                |_| {},
+            ) == Err(WalkError::TreeTooDeep)
+        });
+    assert!(too_deep, "TREE_FRAMES is more than the trees need");
 }
 
 /// A damaged embedded file is an `app::Error::Format` on the firmware path, not a panic.
