@@ -93,13 +93,14 @@ struct Dir {
     /// For an end placed in `f64` through a hop ([`Tree::map_end`]; `angle` is then
     /// rounded): the exact direction, so that events and vertices exactly on it are
     /// classified exactly (a vertex exactly on a mapped range end is a frequent
-    /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`). `None` past `Wide`'s
-    /// budget.
+    /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`), as its index in the
+    /// stack of exact directions ([`Stacks::exacts`]: 272 bytes each, so range ends, which
+    /// are moved around a lot, do not carry them). `None` past `Wide`'s budget.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
         allow(dead_code)
     )]
-    exact: Option<(Wide, Wide)>,
+    exact: Option<u16>,
 }
 
 impl Dir {
@@ -130,10 +131,15 @@ impl Dir {
 /// Range ends against exact directions, for anchored walks and splits.
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl Dir {
+    /// The exact direction of this end, from the stack `exacts`.
+    fn exact<'e>(&self, exacts: &'e [(Wide, Wide)]) -> Option<&'e (Wide, Wide)> {
+        exacts.get(usize::from(self.exact?))
+    }
+
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly.
-    fn turn(&self, v: (i128, i128)) -> Sign {
-        match self.exact.as_ref().and_then(|x| Wide::cross(x, v)) {
+    fn turn(&self, exacts: &[(Wide, Wide)], v: (i128, i128)) -> Sign {
+        match self.exact(exacts).and_then(|x| Wide::cross(x, v)) {
             Some(c) => c.sign(),
             None => Sign::of_i128(cross(self.angle.vector(), v)),
         }
@@ -144,7 +150,7 @@ impl Dir {
     /// `Greater` after it (the walk's range is less than a half turn, so the side of the
     /// line decides). Without an exact direction only `Equal` is decided (`inside`
     /// otherwise: the walk itself orders events against an exact end).
-    fn place(&self, a: &Angle, inside: Ordering, ccw: bool) -> Ordering {
+    fn place(&self, exacts: &[(Wide, Wide)], a: &Angle, inside: Ordering, ccw: bool) -> Ordering {
         if self.exact.is_none() {
             return if a.cmp_exact(&self.angle) == Ordering::Equal {
                 Ordering::Equal
@@ -152,7 +158,7 @@ impl Dir {
                 inside
             };
         }
-        let ccw_order = match self.turn(a.vector()) {
+        let ccw_order = match self.turn(exacts, a.vector()) {
             Sign::Positive => Ordering::Greater,
             Sign::Zero => Ordering::Equal,
             Sign::Negative => Ordering::Less,
@@ -233,9 +239,10 @@ struct Tree<'a, 's, S: Storage> {
 /// object: entry split, exit split and the walk), plus one per screen along the way;
 /// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
 /// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `N` frames of about 1.9 KiB plus 2.2 KiB for the hops and
-/// the branch (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` checks
-/// `size_of::<TreeScratch<N>>() ≤ 2 KiB · (N + 2)`).
+/// Reused across trees. Size: `19 312 + 1 104·N` bytes on x86-64 — `N` frames, and the hops,
+/// the branch and the 1024-bit exact directions of mapped range ends for the deepest tree
+/// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks
+/// `size_of::<TreeScratch<N>>() ≤ 1.25 KiB · N + 20 KiB`).
 pub struct TreeScratch<const N: usize> {
     stacks: Stacks<heapless::Vec<Frame, N>>,
 }
@@ -256,6 +263,8 @@ struct Stacks<F> {
     frames: F,
     hops: heapless::Vec<Hop, MAX_HOPS>,
     branch: Branch,
+    /// The exact directions of the range ends mapped through the hops (two per hop).
+    exacts: heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
 }
 
 impl<F: Frames> Stacks<F> {
@@ -264,6 +273,7 @@ impl<F: Frames> Stacks<F> {
             frames,
             hops: heapless::Vec::new(),
             branch: heapless::Vec::new(),
+            exacts: heapless::Vec::new(),
         }
     }
 }
@@ -359,6 +369,7 @@ struct Level {
     ccw: bool,
     hops: usize,
     branch: usize,
+    exacts: usize,
 }
 
 /// The primary walk restricted to the range `(f, t)` (exact positions: the lap of the walk
@@ -543,15 +554,45 @@ pub fn ray_tree<S: Storage>(
     q: QueryPoint,
     depth: usize,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    let zero = Direction { x: 1, y: 0 };
-    let mut out = collect(complex, scene, q, depth, zero, zero, true)?;
-    // The range from θ = 0 round to θ = 0 starts an interval at 0 where the full circle
-    // has none: the interval before continues through it.
-    if out.len() > 1 && out.first().map(|i| &i.branch) == out.last().map(|i| &i.branch) {
-        out.remove(0);
+    // The full circle round from a primary boundary: a cut anywhere else (θ = 0) could
+    // fall exactly on a deeper boundary, whose rule the cut would lose.
+    let tree = Tree { complex, scene };
+    let first = tree.first_boundary(q)?;
+    let d = match &first {
+        Some(b) => {
+            let v = b.angle.vector();
+            match (i64::try_from(v.0), i64::try_from(v.1)) {
+                (Ok(x), Ok(y)) => Direction::new(x, y).ok_or(WalkError::Corrupt)?,
+                _ => return Err(WalkError::Corrupt),
+            }
+        }
+        // Nothing seen all around.
+        None => Direction { x: 1, y: 0 },
+    };
+    let mut out = collect(complex, scene, q, depth, (d, d), true, false)?;
+    let left = out.last().map(|i| i.branch.clone()).unwrap_or_default();
+    let several = out.len() > 1;
+    match out.first_mut() {
+        // A boundary of the primary walk where the branch stays (a screen appears): the
+        // last interval continues through it.
+        Some(i) if several && i.branch == left => {
+            out.remove(0);
+        }
+        // The first interval starts on the boundary: its vertex is resolved against the
+        // last interval, which ends there (the primary stage: no hops).
+        Some(i) => {
+            if let Some(b) = first {
+                let rule = tree.event_boundary(0, 0, q, &b).rule;
+                i.exact_start = Some(b.angle);
+                i.start_vertex = tree.resolve(&[], &rule, &left, &i.branch);
+            }
+        }
+        None => {}
     }
     match out.as_mut_slice() {
+        // One branch all around: no boundary.
         [only] => {
+            only.start = 0.0;
             only.exact_start = None;
             only.start_vertex = None;
         }
@@ -584,7 +625,7 @@ pub fn ray_tree_range<S: Storage>(
     from: Direction,
     to: Direction,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    collect(complex, scene, q, depth, from, to, true)
+    collect(complex, scene, q, depth, (from, to), true, true)
 }
 
 /// The ray tree over a field of view as a frame draws it: the intervals of
@@ -599,18 +640,20 @@ pub fn frame_tree<S: Storage>(
     from: Direction,
     to: Direction,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    collect(complex, scene, q, depth, from, to, false)
+    collect(complex, scene, q, depth, (from, to), false, false)
 }
 
+/// The intervals of the sweep over `range`, with their vertices if `vertices` — the first
+/// one's (`context`) only when a full-tree boundary may lie exactly on the range start.
 #[cfg(feature = "alloc")]
 fn collect<S: Storage>(
     complex: &Complex<S>,
     scene: &SceneRef<'_>,
     q: QueryPoint,
     depth: usize,
-    from: Direction,
-    to: Direction,
+    range: (Direction, Direction),
     vertices: bool,
+    context: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
     let mut stacks = Stacks::new(Vec::new());
     let mut out = Vec::new();
@@ -627,8 +670,8 @@ fn collect<S: Storage>(
         scene,
         q,
         depth,
-        (from, to),
-        vertices,
+        range,
+        (vertices, context),
         &mut stacks,
         &mut sink,
     )?;
@@ -667,7 +710,7 @@ pub fn frame_tree_into<S: Storage, const N: usize>(
         q,
         depth,
         (from, to),
-        false,
+        (false, false),
         &mut scratch.stacks,
         &mut sink,
     )
@@ -680,7 +723,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     q: QueryPoint,
     depth: usize,
     (from, to): (Direction, Direction),
-    vertices: bool,
+    (vertices, context): (bool, bool),
     scratch: &mut Stacks<F>,
     sink: &mut K,
 ) -> Result<(), WalkError> {
@@ -689,6 +732,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     scratch.frames.clear();
     scratch.hops.clear();
     scratch.branch.clear();
+    scratch.exacts.clear();
     let start = complex.trace_start(scene, q)?;
     let mut em = Emitter {
         sink,
@@ -699,7 +743,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     };
     // The branch just left of `from`, for the first interval's vertex: only where a vertex
     // lies exactly on the ray (else no boundary of the full tree can lie on it).
-    if vertices && tree.any_vertex_on_ray(q, &f) {
+    if context && tree.any_vertex_on_ray(q, &f) {
         em.left_of_f = tree.left_of(scratch, q, start, depth, f)?;
     }
     let primary = tree.primary_walk(q, start, depth, f, t, false);
@@ -760,6 +804,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 ccw: true,
                 hops: 0,
                 branch: 0,
+                exacts: 0,
             },
             events: Events::new(walker, true),
             f,
@@ -781,6 +826,28 @@ impl<S: Storage> Tree<'_, '_, S> {
             closed_on_boundary: false,
             done: false,
         }
+    }
+
+    /// The first primary boundary from θ = 0 counter-clockwise (the first event of the
+    /// first cluster of events on one exact ray where the object seen changes), if any.
+    #[cfg(feature = "alloc")]
+    fn first_boundary(&self, q: QueryPoint) -> Result<Option<Dir>, WalkError> {
+        let start = self.complex.trace_start(self.scene, q)?;
+        let zero = Angle::ZERO;
+        let mut walk = self.primary_walk(q, start, 0, zero, zero, false);
+        let mut seen = self.complex.ceiling(start);
+        while let Some(c) = walk.events.cluster(self.complex, self.scene)? {
+            // Round once (lap 1 holds the events at θ = 0 that end the first lap).
+            if c.lap > 1 || (c.lap == 1 && c.first.angle.cmp_exact(&zero) != Ordering::Equal) {
+                break;
+            }
+            let after = self.complex.ceiling(c.last.cylinder);
+            if after != seen {
+                return Ok(Some(Dir::of(&c.first)));
+            }
+            seen = after;
+        }
+        Ok(None)
     }
 
     /// The branch of the last leaf just before `f`: the piece of the primary walk that ends
@@ -843,12 +910,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                     None => Item::Done(w.level),
                 },
                 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-                Frame::Walk(w) => match w.next_piece(self, stage, level_len)? {
+                Frame::Walk(w) => match w.next_piece(self, &sc.exacts, stage, level_len)? {
                     Some(p) => Item::Piece(w.level, p),
                     None => Item::Done(w.level),
                 },
                 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-                Frame::Split(s) => match s.next_edge(self, stage, level_len) {
+                Frame::Split(s) => match s.next_edge(self, &sc.exacts, stage, level_len) {
                     Some((lo, hi, b, e)) => Item::Edge(s.level, s.m, s.kind, lo, hi, b, e),
                     None => Item::Done(s.level),
                 },
@@ -863,6 +930,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     sc.frames.pop();
                     sc.hops.truncate(level.hops);
                     sc.branch.truncate(level.branch);
+                    sc.exacts.truncate(level.exacts);
                 }
             }
         }
@@ -891,6 +959,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let here = Level {
             hops: sc.hops.len(),
             branch: sc.branch.len(),
+            exacts: sc.exacts.len(),
             ..level
         };
         let frame = match material {
@@ -1631,6 +1700,7 @@ impl RangeWalk {
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
+        exacts: &[(Wide, Wide)],
         stage: usize,
         level: usize,
     ) -> Result<Option<Piece>, WalkError> {
@@ -1641,7 +1711,7 @@ impl RangeWalk {
         let mut end = None;
         if let Some(events) = self.events.as_mut() {
             while let Some(c) = events.cluster(tree.complex, tree.scene)? {
-                match self.to.place(&c.first.angle, Ordering::Less, ccw) {
+                match self.to.place(exacts, &c.first.angle, Ordering::Less, ccw) {
                     // On the closing ray: not inside the open range.
                     Ordering::Equal => {
                         end = Some(Dir::of(&c.first));
@@ -1652,7 +1722,9 @@ impl RangeWalk {
                     Ordering::Less => {}
                 }
                 let after = tree.complex.ceiling(c.last.cylinder);
-                let opening = self.from.place(&c.first.angle, Ordering::Greater, ccw);
+                let opening = self
+                    .from
+                    .place(exacts, &c.first.angle, Ordering::Greater, ccw);
                 if opening != Ordering::Greater {
                     // On the opening ray (or before the exact start, after the rounded
                     // one): part of the state at the start.
@@ -1701,7 +1773,12 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// points at an endpoint of the hop's edge (or the hit point falls on or beyond one),
     /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
     /// only places the range end; the angular error is about 2⁻⁵² rad).
-    fn map_end(&self, end: &Dir, hop: &Hop) -> Result<Dir, WalkError> {
+    fn map_end(
+        &self,
+        exacts: &mut heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
+        end: &Dir,
+        hop: &Hop,
+    ) -> Result<Dir, WalkError> {
         if let Some((v, _)) = end.vertex {
             if v == hop.a || v == hop.b {
                 return Ok(self.toward(hop.next, v));
@@ -1743,7 +1820,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         // The same exactly, scaled by |den|: `(prev − next)·den + num·d`.
         let exact = (|| {
             let d = end
-                .exact
+                .exact(exacts)
+                .copied()
                 .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
             let den = Wide::cross(&d, e)?;
             let num = cross(diff(a, hop.prev), e);
@@ -1755,6 +1833,15 @@ impl<S: Storage> Tree<'_, '_, S> {
                 Sign::Positive => Some((x, y)),
             }
         })();
+        // Kept on the stack of exact directions until the frame walking it is popped.
+        let exact = match exact {
+            Some(x) => {
+                let i = u16::try_from(exacts.len()).map_err(|_| WalkError::TreeTooDeep)?;
+                exacts.push(x).map_err(|_| WalkError::TreeTooDeep)?;
+                Some(i)
+            }
+            None => None,
+        };
         Ok(Dir {
             angle: Angle::constant(dir),
             vertex: None,
@@ -1770,12 +1857,16 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// before that direction).
     fn map_range(
         &self,
+        exacts: &mut heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
         lo: &Dir,
         hi: &Dir,
         hop: &Hop,
         flip: bool,
     ) -> Result<(Dir, Dir), WalkError> {
-        let (a, b) = (self.map_end(lo, hop)?, self.map_end(hi, hop)?);
+        let (a, b) = (
+            self.map_end(exacts, lo, hop)?,
+            self.map_end(exacts, hi, hop)?,
+        );
         let (a, b) = if flip { (b, a) } else { (a, b) };
         let thin = cross(lo.angle.vector(), hi.angle.vector()) == 0;
         if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
@@ -1836,16 +1927,16 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             (&to, &from)
         };
-        let (x, y) = self.map_range(lo, hi, &hop, flip)?;
-        let ccw = level.ccw != flip;
-        let (from, to) = if ccw { (x, y) } else { (y, x) };
         let here = Level {
             eye: eye2,
-            ccw,
+            ccw: level.ccw != flip,
             hops: sc.hops.len(),
             branch: sc.branch.len(),
+            exacts: sc.exacts.len(),
             ..level
         };
+        let (x, y) = self.map_range(&mut sc.exacts, lo, hi, &hop, flip)?;
+        let (from, to) = if here.ccw { (x, y) } else { (y, x) };
         sc.hops.push(hop).map_err(|_| WalkError::TreeTooDeep)?;
         let frame = match kind {
             #[cfg(feature = "refraction")]
@@ -1948,6 +2039,7 @@ impl Split {
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
+        exacts: &[(Wide, Wide)],
         stage: usize,
         level: usize,
     ) -> Option<(Dir, Dir, Boundary, (usize, usize))> {
@@ -1983,12 +2075,12 @@ impl Split {
         let piece = |((_, _), (s0, s1)): ((usize, usize), (usize, usize))| {
             let (v0, v1) = (diff(tree.qpoint(s0), eye), diff(tree.qpoint(s1), eye));
             // Against the range ends exactly (`Dir::turn`), counter-clockwise.
-            let sv = (lo.turn(v0) == Sign::Positive).then_some(v0);
-            let ev = (hi.turn(v1) == Sign::Negative).then_some(v1);
+            let sv = (lo.turn(exacts, v0) == Sign::Positive).then_some(v0);
+            let ev = (hi.turn(exacts, v1) == Sign::Negative).then_some(v1);
             let nonempty = match (sv, ev) {
                 (Some(a), Some(b)) => cross(a, b) > 0,
-                (None, Some(b)) => lo.turn(b) == Sign::Positive,
-                (Some(a), None) => hi.turn(a) == Sign::Negative,
+                (None, Some(b)) => lo.turn(exacts, b) == Sign::Positive,
+                (Some(a), None) => hi.turn(exacts, a) == Sign::Negative,
                 (None, None) => cross(lv, hv) > 0,
             };
             nonempty.then(|| {
