@@ -1223,7 +1223,10 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The vertex of the boundary of `rule` between the branches `left` and `right`; `hops`
-    /// is the stack of hops, of which the rule's stage is a prefix.
+    /// is the stack of hops, of which the rule's stage is a prefix. Out of line: its
+    /// 1024-bit tables (3.4 KiB) would otherwise take stack in every caller, even in the
+    /// walks that resolve no vertex (frames).
+    #[inline(never)]
     fn resolve(
         &self,
         hops: &[Hop],
