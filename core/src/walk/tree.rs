@@ -1463,13 +1463,13 @@ impl<S: Storage> Tree<'_, '_, S> {
         let c = self.complex.cylinder(id).ok_or(WalkError::Corrupt)?;
         let zero = angle.cmp_exact(&Angle::ZERO) == Ordering::Equal;
         // Counter-clockwise, the turned line lies past θ = 0: an opening ray exactly at
-        // θ = 0 that the perturbation puts just below 2π starts the walk at θ = 0 instead.
-        // Clockwise from exactly θ = 0 the turned line lies just below 2π: the walk starts
-        // at the top, and tangents exactly at θ = 0 that the perturbation puts below 2π
-        // are ahead of it.
+        // θ = 0 that the perturbation puts just below 2π starts the walk at θ = 0 instead,
+        // and tangents exactly at θ = 0 just below 2π are ahead. Clockwise from exactly
+        // θ = 0 the turned line lies just below 2π: the walk starts at the top (`None`),
+        // and the tangents exactly at θ = 0 just below 2π are behind it, the others ahead.
         let mut theta = match (ccw, zero) {
             (true, _) if wraps(angle) => Some(Angle::ZERO),
-            (false, true) => return Ok((id, None)),
+            (false, true) => None,
             _ => Some(*angle),
         };
         let behind = if ccw {
@@ -1477,6 +1477,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             Ordering::Less
         };
+        let near_side = |a: &Angle| wraps(a) == (!ccw && zero);
         for chain in [c.bottom, c.top].into_iter().flatten() {
             // Only a vertex exactly on the opening line can make a tangent exactly on it.
             if chain.object == m || !self.vertex_on_line(eye, angle, chain.object) {
@@ -1487,8 +1488,8 @@ impl<S: Storage> Tree<'_, '_, S> {
                 let fwd = Angle::from_query(eye, ranked(self.scene, h));
                 for a in [fwd, fwd.reversed()] {
                     if a.cmp_exact(angle) == Ordering::Equal
-                        && !wraps(&a)
-                        && theta.is_some_and(|t| a.cmp_angle(&t) == behind)
+                        && near_side(&a)
+                        && theta.is_none_or(|t| a.cmp_angle(&t) == behind)
                     {
                         theta = Some(a);
                     }
