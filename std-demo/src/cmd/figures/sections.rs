@@ -369,9 +369,10 @@ pub(super) fn frames(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         .map(|e| format!("{:.0} µs", e.2))
         .collect();
     let mut notes = format!(
-        "A ray-tree frame walks the tree over the field of view only (`walk::frame_tree`: \
-         `walk::ray_tree_range` without the boundary vertices, which a frame does not draw; \
-         the primary walk is still the full circle): frame / full-circle tree = {} for the \
+        "A ray-tree frame walks the tree over the field of view only, in lock step and \
+         without allocating, as a device does (`walk::frame_tree_into` into a reused scratch \
+         and buffer: `walk::ray_tree_range` without the boundary vertices, which a frame does \
+         not draw; the primary walk is still the full circle): frame / full-circle tree = {} for the \
          depth-5 scenes, per-column work included. A view frame walks the full view and adds \
          the frame's own work ({} columns: one branch followed per column in `f64`, and the \
          exact coverage): {}.",
