@@ -40,13 +40,13 @@ use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::wide::{mod_p, residue_i128, Wide, P};
 use crate::geom::{Point, QueryPoint, Sign};
-use crate::partition::{Complex, Storage};
+use crate::partition::{Complex, CylinderId, Storage};
 use crate::scene::{Material, ObjectId, SceneRef};
 // Anchored walks (behind screens, mirrors and refractive objects).
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 use {
     crate::line_space::{ranked, Bound, Chain},
-    crate::partition::{Cylinder, CylinderId, Layer, Side, Wall},
+    crate::partition::{Cylinder, Layer, Side, Wall},
 };
 // Changes of eye (mirrors and refractive objects).
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
@@ -557,7 +557,8 @@ pub fn ray_tree<S: Storage>(
     // The full circle round from a primary boundary: a cut anywhere else (θ = 0) could
     // fall exactly on a deeper boundary, whose rule the cut would lose.
     let tree = Tree { complex, scene };
-    let first = tree.first_boundary(q)?;
+    let start = complex.trace_start(scene, q)?;
+    let first = tree.first_boundary(q, start)?;
     let d = match &first {
         Some(b) => {
             let v = b.angle.vector();
@@ -569,7 +570,7 @@ pub fn ray_tree<S: Storage>(
         // Nothing seen all around.
         None => Direction { x: 1, y: 0 },
     };
-    let mut out = collect(complex, scene, q, depth, (d, d), true, false)?;
+    let mut out = collect(complex, scene, (q, start), depth, (d, d), true, false)?;
     let left = out.last().map(|i| i.branch.clone()).unwrap_or_default();
     let several = out.len() > 1;
     match out.first_mut() {
@@ -625,7 +626,8 @@ pub fn ray_tree_range<S: Storage>(
     from: Direction,
     to: Direction,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    collect(complex, scene, q, depth, (from, to), true, true)
+    let start = complex.trace_start(scene, q)?;
+    collect(complex, scene, (q, start), depth, (from, to), true, true)
 }
 
 /// The ray tree over a field of view as a frame draws it: the intervals of
@@ -640,16 +642,18 @@ pub fn frame_tree<S: Storage>(
     from: Direction,
     to: Direction,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    collect(complex, scene, q, depth, (from, to), false, false)
+    let start = complex.trace_start(scene, q)?;
+    collect(complex, scene, (q, start), depth, (from, to), false, false)
 }
 
-/// The intervals of the sweep over `range`, with their vertices if `vertices` — the first
-/// one's (`context`) only when a full-tree boundary may lie exactly on the range start.
+/// The intervals of the sweep from `q` (its θ = 0 cylinder `start`) over `range`, with
+/// their vertices if `vertices` — the first one's (`context`) only when a full-tree
+/// boundary may lie exactly on the range start.
 #[cfg(feature = "alloc")]
 fn collect<S: Storage>(
     complex: &Complex<S>,
     scene: &SceneRef<'_>,
-    q: QueryPoint,
+    (q, start): (QueryPoint, CylinderId),
     depth: usize,
     range: (Direction, Direction),
     vertices: bool,
@@ -668,7 +672,7 @@ fn collect<S: Storage>(
     sweep(
         complex,
         scene,
-        q,
+        (q, start),
         depth,
         range,
         (vertices, context),
@@ -697,6 +701,7 @@ pub fn frame_tree_into<S: Storage, const N: usize>(
     scratch: &mut TreeScratch<N>,
     mut emit: impl FnMut(TreeSpan<'_>),
 ) -> Result<(), WalkError> {
+    let start = complex.trace_start(scene, q)?;
     let mut sink = |i: Interval<'_>| {
         emit(TreeSpan {
             start: i.start,
@@ -707,7 +712,7 @@ pub fn frame_tree_into<S: Storage, const N: usize>(
     sweep(
         complex,
         scene,
-        q,
+        (q, start),
         depth,
         (from, to),
         (false, false),
@@ -720,7 +725,7 @@ pub fn frame_tree_into<S: Storage, const N: usize>(
 fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     complex: &Complex<S>,
     scene: &SceneRef<'_>,
-    q: QueryPoint,
+    (q, start): (QueryPoint, CylinderId),
     depth: usize,
     (from, to): (Direction, Direction),
     (vertices, context): (bool, bool),
@@ -733,7 +738,6 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     scratch.hops.clear();
     scratch.branch.clear();
     scratch.exacts.clear();
-    let start = complex.trace_start(scene, q)?;
     let mut em = Emitter {
         sink,
         vertices,
@@ -779,7 +783,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     fn primary_walk(
         &self,
         q: QueryPoint,
-        start: crate::partition::CylinderId,
+        start: CylinderId,
         depth: usize,
         f: Angle,
         t: Angle,
@@ -831,8 +835,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// The first primary boundary from θ = 0 counter-clockwise (the first event of the
     /// first cluster of events on one exact ray where the object seen changes), if any.
     #[cfg(feature = "alloc")]
-    fn first_boundary(&self, q: QueryPoint) -> Result<Option<Dir>, WalkError> {
-        let start = self.complex.trace_start(self.scene, q)?;
+    fn first_boundary(&self, q: QueryPoint, start: CylinderId) -> Result<Option<Dir>, WalkError> {
         let zero = Angle::ZERO;
         let mut walk = self.primary_walk(q, start, 0, zero, zero, false);
         let mut seen = self.complex.ceiling(start);
@@ -857,7 +860,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         &self,
         scratch: &mut Stacks<F>,
         q: QueryPoint,
-        start: crate::partition::CylinderId,
+        start: CylinderId,
         depth: usize,
         f: Angle,
     ) -> Result<Option<Branch>, WalkError> {
