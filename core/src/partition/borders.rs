@@ -46,18 +46,21 @@ impl Layer {
     }
 }
 
-/// Derived lookup state of a complex, borrowed: the angle of every vertex, and for every
+/// Derived lookup state of a complex, borrowed: the angle of every vertex, for every
 /// chain, side and layer the bordering cylinders sorted by θ (one flat id array cut by
-/// offsets), addressed by an index (no map on the walk's hot path). Rebuilt from the
+/// offsets), addressed by an index (no map on the walk's hot path), and the index of the
+/// cross-section at θ = 0 that starts a view ([`Complex::at_zero`]). Rebuilt from the
 /// cylinders and vertices, never trusted from a file: [`BordersRef::rebuild_into`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BordersRef<'a> {
     /// θ of every vertex, in vertex order; empty to compute angles on demand (saves
     /// `size_of::<Angle>()` bytes of RAM per vertex, costs one angle construction per wall).
     angles: &'a [Angle],
-    /// The tilings, one after the other: `ids[offsets[k]..offsets[k + 1]]` is tiling `k`.
+    /// The tilings, one after the other: `ids[offsets[k]..offsets[k + 1]]` is tiling `k`;
+    /// after the `12 · objects` tilings, the cylinders at θ = 0 sorted by the height of
+    /// their bottom arc, then their interval tree's maxima (see `ZeroIndex`).
     ids: &'a [CylinderId],
-    /// `12 · objects + 1` offsets into `ids`.
+    /// `12 · objects + 3` offsets into `ids`.
     offsets: &'a [u32],
     /// For every cylinder, its bottom (`[0]`) and top (`[1]`) arc, and each of the (at most
     /// two) layers on the far side of that arc: the index, in the far side's tiling, of the
@@ -94,9 +97,10 @@ impl Borders {
 pub struct BorderSizes {
     /// Vertex angles: one per vertex (or 0, to compute them on demand).
     pub angles: usize,
-    /// Cylinder ids of the tilings: one per bounded arc of a cylinder (at most two each).
+    /// Cylinder ids of the tilings (one per bounded arc of a cylinder, at most two each)
+    /// and of the θ = 0 index (two per cylinder at θ = 0: `3 · objects + 1` of them).
     pub ids: usize,
-    /// Tiling offsets: `12 · objects + 1`.
+    /// Tiling offsets: `12 · objects + 3`.
     pub offsets: usize,
     /// Start indices: one per cylinder.
     pub start: usize,
@@ -104,24 +108,26 @@ pub struct BorderSizes {
 
 impl BorderSizes {
     /// Sizes that suffice for any complex with these counts (`ids` is the upper bound
-    /// `2 · cylinders`); usable in `const` array lengths.
+    /// `2 · cylinders + 2 · (3 · objects + 1)`); usable in `const` array lengths.
     pub const fn for_counts(objects: usize, vertices: usize, cylinders: usize) -> BorderSizes {
         BorderSizes {
             angles: vertices,
-            ids: 2 * cylinders,
-            offsets: 12 * objects + 1,
+            ids: 2 * cylinders + 2 * (3 * objects + 1),
+            offsets: 12 * objects + 3,
             start: cylinders,
         }
     }
 
-    /// The exact sizes for these cylinders (`ids` counts their bounded arcs).
+    /// The exact sizes for these cylinders (`ids` counts their bounded arcs and twice the
+    /// cylinders at θ = 0).
     pub fn exact(objects: usize, vertices: usize, cylinders: &[Cylinder]) -> BorderSizes {
-        let arcs = cylinders
+        let arcs: usize = cylinders
             .iter()
             .map(|c| usize::from(c.bottom.is_some()) + usize::from(c.top.is_some()))
             .sum();
+        let zero = cylinders.iter().filter(|c| c.left == Wall::Zero).count();
         BorderSizes {
-            ids: arcs,
+            ids: arcs + 2 * zero,
             ..BorderSizes::for_counts(objects, vertices, cylinders.len())
         }
     }
@@ -285,12 +291,23 @@ impl<'a> BordersRef<'a> {
         };
 
         // Counting sort into the tilings: count per slot, prefix sums, place (the offsets
-        // serve as cursors and end up shifted by one slot), shift back.
+        // serve as cursors and end up shifted by one slot), shift back. The two slots of
+        // the θ = 0 index follow the tilings. Slots past the last object's (corrupt ids)
+        // are skipped.
+        let tilings = 12 * scene.len();
+        let zero_slot = tilings;
         offsets.fill(0);
         for c in cylinders {
-            for s in arcs(c) {
+            for s in arcs(c).filter(|&s| s < tilings) {
                 if let Some(n) = offsets.get_mut(s + 1) {
                     *n += 1;
+                }
+            }
+            if c.left == Wall::Zero {
+                for s in [zero_slot, zero_slot + 1] {
+                    if let Some(n) = offsets.get_mut(s + 1) {
+                        *n += 1;
+                    }
                 }
             }
         }
@@ -303,9 +320,13 @@ impl<'a> BordersRef<'a> {
             let Some(id) = CylinderId::from_index(i) else {
                 break;
             };
-            // Slots past the last object (corrupt ids) were not counted: skip them.
-            let slots = offsets.len();
-            for s in arcs(c).filter(|&s| s + 1 < slots) {
+            // A cylinder at θ = 0 goes in both slots of the index (the second one's
+            // contents are replaced by the tree maxima).
+            let zero = (c.left == Wall::Zero).then_some([zero_slot, zero_slot + 1]);
+            for s in arcs(c)
+                .filter(|&s| s < tilings)
+                .chain(zero.into_iter().flatten())
+            {
                 if let Some(cursor) = offsets.get_mut(s) {
                     if let Some(slot) = ids.get_mut(*cursor as usize) {
                         *slot = id;
@@ -322,10 +343,20 @@ impl<'a> BordersRef<'a> {
         // Vertices are sorted by θ (an invariant `validate` checks), so a wall's position in
         // θ is its vertex index, θ = 0 first: sorting and merging compare integers.
         let left = |id: &CylinderId| cylinders.get(id.index()).map_or(0, |c| wall_rank(c.left));
-        for k in 0..offsets.len().saturating_sub(1) {
+        for k in 0..tilings {
             if let Some(list) = range(offsets, k).and_then(|r| ids.get_mut(r)) {
                 list.sort_unstable_by_key(left);
             }
+        }
+        let (zero, maxima) = match (range(offsets, zero_slot), range(offsets, zero_slot + 1)) {
+            (Some(z), Some(m)) => {
+                let (head, tail) = ids.split_at_mut(m.start);
+                (head.get_mut(z), tail.get_mut(..m.len()))
+            }
+            _ => (None, None),
+        };
+        if let (Some(zero), Some(maxima)) = (zero, maxima) {
+            ZeroIndex::build(scene, cylinders, zero, maxima);
         }
         let ids: &'a [CylinderId] = ids;
         let offsets: &'a [u32] = offsets;
@@ -396,6 +427,35 @@ impl<'a> BordersRef<'a> {
             + core::mem::size_of_val(self.ids)
             + core::mem::size_of_val(self.offsets)
             + core::mem::size_of_val(self.start)
+    }
+}
+
+/// Heapsort of `ids` by `key`, for the θ = 0 index: in place, no heap, O(k log k), and a
+/// few hundred bytes of a device's flash where another instantiation of the standard
+/// library's sort costs kilobytes.
+fn sort_by_key(ids: &mut [CylinderId], key: &dyn Fn(&CylinderId) -> i64) {
+    // Moves the element at `root` down the max-heap `ids[..end]` (`root` at least doubles
+    // per round).
+    let sift = |ids: &mut [CylinderId], mut root: usize, end: usize| {
+        let k = |ids: &[CylinderId], i: usize| ids.get(i).map(key);
+        while 2 * root + 1 < end {
+            let mut child = 2 * root + 1;
+            if child + 1 < end && k(ids, child + 1) > k(ids, child) {
+                child += 1;
+            }
+            if k(ids, child) <= k(ids, root) {
+                return;
+            }
+            ids.swap(root, child);
+            root = child;
+        }
+    };
+    for root in (0..ids.len() / 2).rev() {
+        sift(ids, root, ids.len());
+    }
+    for end in (1..ids.len()).rev() {
+        ids.swap(0, end);
+        sift(ids, 0, end);
     }
 }
 
@@ -508,5 +568,195 @@ impl<S: Storage> super::Complex<S> {
                 .is_some_and(|r| angle.cmp_angle(&r) == Ordering::Less),
         };
         inside.then_some(id)
+    }
+}
+
+/// The index of the cross-section at θ = 0, where every view starts (the walk's start
+/// cylinder is the one containing the horizontal line through the viewpoint, in its
+/// layer). At θ = 0 a cylinder spans the offsets (here: heights `y`) from its bottom
+/// arc's chain to its top arc's — a chain's point at θ = 0 is its object's lowest (lower
+/// chain) or highest (upper chain) vertex, so its height is an exact integer from the
+/// bounding box. The cylinders at θ = 0 are kept sorted by bottom height, with an
+/// implicit interval tree over that order (Li's cgranges layout: the in-order array is
+/// the tree; node `i` of level `k`, `k` the trailing ones of `i`, spans `i ± (2ᵏ − 1)`)
+/// holding per node the cylinder of greatest top height in its subtree. A stabbing query
+/// visits the cylinders whose closed height range contains a height in
+/// O(log Z + stabbed · log Z) instead of scanning all `Z = 3 · objects + 1`.
+struct ZeroIndex<'a, 's> {
+    scene: SceneRef<'s>,
+    cylinders: &'a [Cylinder],
+    /// The cylinders at θ = 0 sorted by bottom height.
+    sorted: &'a [CylinderId],
+    /// Per node of the tree, the cylinder of greatest top height in its subtree.
+    maxima: &'a [CylinderId],
+}
+
+/// The height of a chain's point at θ = 0 (`None`: an object id out of range).
+fn zero_height(scene: &SceneRef<'_>, chain: Chain) -> Option<i64> {
+    let (lo, hi) = scene.object(chain.object)?.bbox();
+    let p = match chain.bound {
+        crate::line_space::Bound::Lower => lo,
+        crate::line_space::Bound::Upper => hi,
+    };
+    Some(p.to_query().y())
+}
+
+/// A cylinder's closed height range at θ = 0; unbounded (or corrupt) arcs give the
+/// extremes, so it is never too short.
+fn zero_span(scene: &SceneRef<'_>, c: &Cylinder) -> (i64, i64) {
+    (
+        c.bottom
+            .and_then(|b| zero_height(scene, b))
+            .unwrap_or(i64::MIN),
+        c.top
+            .and_then(|t| zero_height(scene, t))
+            .unwrap_or(i64::MAX),
+    )
+}
+
+/// Levels of the implicit tree over `len` nodes: the root is node `2^levels - 1`.
+fn zero_levels(len: usize) -> u32 {
+    let mut k = 0;
+    while k < 40 && (1usize << (k + 1)) - 1 < len {
+        k += 1;
+    }
+    k
+}
+
+impl<'a, 's> ZeroIndex<'a, 's> {
+    /// The closed height range of cylinder `id` at θ = 0.
+    fn span(&self, id: CylinderId) -> (i64, i64) {
+        self.cylinders
+            .get(id.index())
+            .map_or((i64::MIN, i64::MAX), |c| zero_span(&self.scene, c))
+    }
+
+    /// Sorts `sorted` by bottom height and fills `maxima`, bottom-up.
+    fn build(
+        scene: &SceneRef<'_>,
+        cylinders: &[Cylinder],
+        sorted: &mut [CylinderId],
+        maxima: &mut [CylinderId],
+    ) {
+        sort_by_key(sorted, &|id| {
+            cylinders
+                .get(id.index())
+                .map_or(i64::MIN, |c| zero_span(scene, c).0)
+        });
+        maxima.copy_from_slice(sorted);
+        let levels = zero_levels(sorted.len());
+        for level in 1..=levels {
+            let half = 1usize << (level - 1);
+            // Nodes of this level: i ≡ 2^level − 1 (mod 2^(level + 1)).
+            let mut i = (1usize << level) - 1;
+            while i < maxima.len() {
+                let index = ZeroIndex {
+                    scene: *scene,
+                    cylinders,
+                    sorted,
+                    maxima,
+                };
+                let mut best = maxima.get(i).copied();
+                for child in [i - half, i + half] {
+                    let Some(m) = index.subtree_argmax(child, level - 1) else {
+                        continue;
+                    };
+                    if best.is_none_or(|b| index.span(m).1 > index.span(b).1) {
+                        best = Some(m);
+                    }
+                }
+                if let (Some(slot), Some(b)) = (maxima.get_mut(i), best) {
+                    *slot = b;
+                }
+                i += 1 << (level + 1);
+            }
+        }
+    }
+
+    /// The cylinder of greatest top height in the subtree of node `i` at `level` (a node
+    /// past the end holds its left subtree's real nodes), or `None` for an empty subtree.
+    fn subtree_argmax(&self, mut i: usize, mut level: u32) -> Option<CylinderId> {
+        loop {
+            if let Some(id) = self.maxima.get(i) {
+                return Some(*id);
+            }
+            if level == 0 {
+                return None;
+            }
+            level -= 1;
+            i = i.checked_sub(1 << level)?;
+        }
+    }
+
+    /// Calls `visit` for every cylinder whose closed height range contains `y`; stops
+    /// early when `visit` returns `true`. Returns `false` if the traversal was cut short
+    /// by its fixed stack (never for a well-formed tree: the stack holds one pending
+    /// sibling per level).
+    fn stab(&self, y: i64, visit: &mut impl FnMut(CylinderId, &'a Cylinder) -> bool) -> bool {
+        let levels = zero_levels(self.sorted.len());
+        let mut stack: heapless::Vec<(usize, u32), 48> = heapless::Vec::new();
+        if stack.push(((1usize << levels) - 1, levels)).is_err() {
+            return false;
+        }
+        while let Some((i, level)) = stack.pop() {
+            if self
+                .subtree_argmax(i, level)
+                .is_none_or(|m| self.span(m).1 < y)
+            {
+                continue;
+            }
+            let node = self.sorted.get(i).copied();
+            let span = node.map(|id| self.span(id));
+            if let (Some(id), Some((lo, hi))) = (node, span) {
+                if lo <= y && y <= hi {
+                    if let Some(c) = self.cylinders.get(id.index()) {
+                        if visit(id, c) {
+                            return true;
+                        }
+                    }
+                }
+            }
+            if level == 0 {
+                continue;
+            }
+            let half = 1usize << (level - 1);
+            // The right subtree starts at or above this node (none past the end).
+            if span.is_some_and(|(lo, _)| lo <= y) && stack.push((i + half, level - 1)).is_err() {
+                return false;
+            }
+            if stack.push((i - half, level - 1)).is_err() {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+impl<S: Storage> super::Complex<S> {
+    /// Calls `visit` for the cylinders at θ = 0 whose closed height range (from their arcs'
+    /// chains, see `ZeroIndex`) contains `y` — a superset of those containing a
+    /// horizontal line at height `y` — until it returns `true`. Returns `false` if the
+    /// index could not answer (a corrupt complex): the caller then scans.
+    pub(crate) fn at_zero<'s>(
+        &'s self,
+        scene: &SceneRef<'_>,
+        y: i64,
+        mut visit: impl FnMut(CylinderId, &'s Cylinder) -> bool,
+    ) -> bool {
+        let b = self.borders_ref();
+        let k = b.offsets.len().saturating_sub(3);
+        let (Some(sorted), Some(maxima)) = (
+            range(b.offsets, k).and_then(|r| b.ids.get(r)),
+            range(b.offsets, k + 1).and_then(|r| b.ids.get(r)),
+        ) else {
+            return false;
+        };
+        let index = ZeroIndex {
+            scene: *scene,
+            cylinders: self.cylinders(),
+            sorted,
+            maxima,
+        };
+        index.stab(y, &mut visit)
     }
 }

@@ -33,28 +33,35 @@ pub enum Location {
 
 /// Whether `q` is inside or on the boundary of an object (exact predicates).
 pub fn point_in_scene(scene: &SceneRef<'_>, q: QueryPoint) -> Option<Location> {
-    scene.objects().iter().enumerate().find_map(|(i, obj)| {
-        let (min, max) = obj.bbox();
-        let (lo, hi) = (min.to_query(), max.to_query());
-        if q.x() < lo.x() || q.x() > hi.x() || q.y() < lo.y() || q.y() > hi.y() {
-            return None;
+    (0..scene.len()).find_map(|i| point_in_object(scene, ObjectId(i as u32), q))
+}
+
+/// Whether `q` lies inside or on the boundary of object `object`.
+pub(crate) fn point_in_object(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    q: QueryPoint,
+) -> Option<Location> {
+    let obj = scene.object(object)?;
+    let (min, max) = obj.bbox();
+    let (lo, hi) = (min.to_query(), max.to_query());
+    if q.x() < lo.x() || q.x() > hi.x() || q.y() < lo.y() || q.y() > hi.y() {
+        return None;
+    }
+    let poly = scene.polygon(obj);
+    let mut on_line = false;
+    for (k, a) in poly.iter().enumerate() {
+        let b = poly.get((k + 1) % poly.len()).copied().unwrap_or(*a);
+        match predicates::orient_query(*a, b, q) {
+            Sign::Negative => return None,
+            Sign::Zero => on_line = true,
+            Sign::Positive => {}
         }
-        let poly = scene.polygon(obj);
-        let mut on_line = false;
-        for (k, a) in poly.iter().enumerate() {
-            let b = poly.get((k + 1) % poly.len()).copied().unwrap_or(*a);
-            match predicates::orient_query(*a, b, q) {
-                Sign::Negative => return None,
-                Sign::Zero => on_line = true,
-                Sign::Positive => {}
-            }
-        }
-        let object = ObjectId(i as u32);
-        Some(if on_line {
-            Location::OnBoundary { object }
-        } else {
-            Location::Inside { object }
-        })
+    }
+    Some(if on_line {
+        Location::OnBoundary { object }
+    } else {
+        Location::Inside { object }
     })
 }
 

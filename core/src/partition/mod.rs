@@ -43,6 +43,7 @@ mod validate;
 #[cfg(feature = "alloc")]
 pub use borders::Borders;
 pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer, Side};
+pub(crate) use locate::point_in_object;
 pub use locate::{point_in_scene, Location};
 pub use region::{Region, RegionError};
 #[cfg(feature = "alloc")]

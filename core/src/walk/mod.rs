@@ -295,6 +295,21 @@ impl<S: Storage> Complex<S> {
         if let Some(r) = self.region().filter(|r| !r.contains(q)) {
             return Err(WalkError::OutsideRegion(r));
         }
+        if self.region().is_none() {
+            if let Some(found) = self.trace_start_indexed(scene, q) {
+                return found;
+            }
+        }
+        self.trace_start_scan(scene, q)
+    }
+
+    /// [`Complex::trace_start`] by scanning all objects and all cylinders at θ = 0 (for a
+    /// complex pruned to a region, whose cross-section at θ = 0 is incomplete).
+    fn trace_start_scan(
+        &self,
+        scene: &SceneRef<'_>,
+        q: QueryPoint,
+    ) -> Result<CylinderId, WalkError> {
         if let Some(l) = crate::partition::point_in_scene(scene, q) {
             return Err(WalkError::NotFree(l));
         }
@@ -323,6 +338,74 @@ impl<S: Storage> Complex<S> {
             .map(|(i, c)| (CylinderId::from_index(i).unwrap_or(CylinderId::ZERO), c));
         self.locate_among(scene, q, &Angle::ZERO, zero)
             .ok_or(WalkError::Corrupt)
+    }
+
+    /// [`Complex::trace_start`] through the index of the cross-section at θ = 0
+    /// ([`Complex::at_zero`]), in time following the cylinders stabbed at `q`'s height
+    /// instead of all objects and all `3n + 1` cylinders there; `None` if the index cannot
+    /// answer (the caller scans). Needs the whole cross-section (no region).
+    ///
+    /// `q` is free unless an object contains it; such an object is the floor of a stabbed
+    /// cylinder (the layer after it) when `q` lies strictly between its lowest and highest
+    /// vertex, else its lower or upper chain bounds a stabbed cylinder at exactly `q`'s
+    /// height. Of the stabbed cylinders only those whose floor reaches back to `q` and whose
+    /// ceiling reaches ahead of it (bounding boxes, exact integers) get the exact test.
+    fn trace_start_indexed(
+        &self,
+        scene: &SceneRef<'_>,
+        q: QueryPoint,
+    ) -> Option<Result<CylinderId, WalkError>> {
+        use crate::partition::point_in_object;
+        let (qx, qy) = (q.x(), q.y());
+        let bbox = |o: ObjectId| {
+            let (lo, hi) = scene.object(o)?.bbox();
+            Some((lo.to_query(), hi.to_query()))
+        };
+        let height = |chain: Option<Chain>| {
+            chain.and_then(|ch| {
+                let (lo, hi) = bbox(ch.object)?;
+                Some(match ch.bound {
+                    Bound::Lower => lo.y(),
+                    Bound::Upper => hi.y(),
+                })
+            })
+        };
+        let mut found = None;
+        let mut not_free = None;
+        let answered = self.at_zero(scene, qy, |id, c| {
+            let on = |chain: Option<Chain>| {
+                chain
+                    .filter(|_| height(chain) == Some(qy))
+                    .map(|ch| ch.object)
+            };
+            for o in [c.floor, on(c.bottom), on(c.top)].into_iter().flatten() {
+                if let Some(l) = point_in_object(scene, o, q) {
+                    not_free = Some(l);
+                    return true;
+                }
+            }
+            let behind = c
+                .floor
+                .is_none_or(|f| bbox(f).is_none_or(|(lo, _)| lo.x() <= qx));
+            let ahead = c
+                .ceiling
+                .is_none_or(|g| bbox(g).is_none_or(|(_, hi)| hi.x() >= qx));
+            if found.is_none()
+                && behind
+                && ahead
+                && self
+                    .locate_among(scene, q, &Angle::ZERO, core::iter::once((id, c)))
+                    .is_some()
+            {
+                found = Some(id);
+            }
+            false
+        });
+        match (not_free, found) {
+            (Some(l), _) => Some(Err(WalkError::NotFree(l))),
+            (None, Some(id)) if answered => Some(Ok(id)),
+            _ => None,
+        }
     }
 
     /// The walker shared by [`Complex::walk_trace`] and the anchored walks of ray trees:
@@ -1072,5 +1155,59 @@ mod tests {
             assert_eq!(steps, 8 * c.cylinders().len() + 8);
             assert_eq!(w.next_step(&c, &s).unwrap_err(), WalkError::Corrupt);
         }
+    }
+
+    /// The θ = 0 index gives the scan's start cylinder or `NotFree` object for every
+    /// viewpoint — free, inside, on edges, on vertices and on vertex heights — and stabs
+    /// exactly the cylinders at θ = 0 whose closed height range holds the viewpoint.
+    #[test]
+    fn indexed_start_agrees_with_the_scan() {
+        let scenes = (0..12u64)
+            .map(|seed| random_scene(seed, 2 + (seed % 5) as i32))
+            .chain([boxes()]);
+        let (mut free, mut not_free) = (0, 0);
+        for (k, scene) in scenes.enumerate() {
+            let s = scene.as_ref();
+            let c: Complex = build_by_sweep(&s).unwrap();
+            let mut points = viewpoints(&scene, k as u64, 300);
+            points.extend(s.vertices().iter().map(|v| v.to_query()));
+            for q in points {
+                let scan = c.trace_start_scan(&s, q);
+                let indexed = c.trace_start_indexed(&s, q).expect("the index answers");
+                assert_eq!(indexed, scan, "scene {k}, q = {q:?}");
+                match scan {
+                    Ok(_) => free += 1,
+                    Err(_) => not_free += 1,
+                }
+                let mut stabbed = Vec::new();
+                assert!(c.at_zero(&s, q.y(), |id, _| {
+                    stabbed.push(id);
+                    false
+                }));
+                stabbed.sort();
+                let height = |ch: Option<Chain>, none: i64| {
+                    ch.map_or(none, |ch| {
+                        let (lo, hi) = s.object(ch.object).unwrap().bbox();
+                        match ch.bound {
+                            Bound::Lower => lo.to_query().y(),
+                            Bound::Upper => hi.to_query().y(),
+                        }
+                    })
+                };
+                let expected: Vec<CylinderId> = c
+                    .cylinders()
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, z)| {
+                        z.left == Wall::Zero
+                            && height(z.bottom, i64::MIN) <= q.y()
+                            && q.y() <= height(z.top, i64::MAX)
+                    })
+                    .map(|(i, _)| CylinderId::from_index(i).unwrap())
+                    .collect();
+                assert_eq!(stabbed, expected, "scene {k}, height {}", q.y());
+            }
+        }
+        assert!(free > 1000 && not_free > 100, "{free} free, {not_free} not");
     }
 }
