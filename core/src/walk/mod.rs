@@ -101,10 +101,15 @@ use crate::line_space::{ranked, Bound, Chain};
 use crate::partition::{Complex, CylinderId, Layer, Location, Side, Storage, Wall};
 use crate::scene::{ObjectId, SceneRef};
 
-/// Entries of a walk's cache of tangents from the eye (round robin): eight hold the
-/// objects a grid view's consecutive cylinders share (four missed often enough to cost
-/// about 7 % of a view; sixteen cost more to search than they save).
-const TANGENT_CACHE: usize = 8;
+/// Entries of the tangent cache of a ray tree's walkers (two-way set associative, see
+/// [`Walker`]): each frame of a [`TreeScratch`] holds one, 20 bytes an entry.
+const TANGENT_CACHE: usize = 16;
+
+/// Entries of the tangent cache of a view's walk ([`Complex::walk_from`]), one walker on
+/// the stack: a grid view from n = 1024 meets about 40 objects' chains, revisited all
+/// around the circle (32 entries miss a third more often, 128 cost more to clear than
+/// they save).
+const VIEW_TANGENT_CACHE: usize = 64;
 
 /// How a walk follows a trace across primary walls.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -427,7 +432,7 @@ impl<S: Storage> Complex<S> {
         end: Option<Position>,
         step: &mut impl FnMut(&Step),
     ) -> Result<(), WalkError> {
-        let mut walker = Walker::new(q, anchor, cur, from, end, true);
+        let mut walker = Walker::<VIEW_TANGENT_CACHE>::with_cache(q, anchor, cur, from, end, true);
         while let Some(s) = walker.next_step_in::<S, true>(self, scene)? {
             step(&s);
         }
@@ -440,8 +445,43 @@ impl<S: Storage> Complex<S> {
     }
 }
 
-/// One entry of a walk's tangent cache: the object and its tangents from the eye.
-type CachedTangents = (Option<ObjectId>, [(usize, Bound); 2], usize);
+/// One entry of a walk's tangent cache: the object and its `count` tangents from the eye
+/// (vertex, bound), packed (a ray tree keeps a walker per frame).
+#[derive(Clone, Copy, Debug)]
+struct CachedTangents {
+    object: Option<ObjectId>,
+    vertices: [u32; 2],
+    bounds: [Bound; 2],
+    count: u8,
+}
+
+impl CachedTangents {
+    const EMPTY: CachedTangents = CachedTangents {
+        object: None,
+        vertices: [0; 2],
+        bounds: [Bound::Lower; 2],
+        count: 0,
+    };
+
+    /// `None` if a vertex index does not fit (then the tangents are not cached).
+    fn pack(object: ObjectId, t: [(usize, Bound); 2], count: usize) -> Option<CachedTangents> {
+        let [(v0, b0), (v1, b1)] = t;
+        Some(CachedTangents {
+            object: Some(object),
+            vertices: [u32::try_from(v0).ok()?, u32::try_from(v1).ok()?],
+            bounds: [b0, b1],
+            count: u8::try_from(count).ok()?,
+        })
+    }
+
+    fn unpack(&self) -> ([(usize, Bound); 2], usize) {
+        let ([v0, v1], [b0, b1]) = (self.vertices, self.bounds);
+        (
+            [(v0 as usize, b0), (v1 as usize, b1)],
+            usize::from(self.count),
+        )
+    }
+}
 
 /// A resumable walk of the trace of `q`: [`Walker::next_step`] advances one event at a
 /// time, so several traces (the generations of a ray tree) can be walked in lock step.
@@ -467,8 +507,13 @@ type CachedTangents = (Option<ObjectId>, [(usize, Bound); 2], usize);
 /// angles, so `Position { lap: 1, angle: Angle::ZERO }` ends a clockwise walk started at
 /// θ = 0 after one full turn. With `end: None` a walk stops at the permanent wall in
 /// either direction (θ = 2π ccw, θ = 0 cw) without crossing it.
+///
+/// `K` is the number of entries of the tangent cache (even): two-way set associative,
+/// the set chosen by a multiplicative hash of the object id (neighbouring objects, which a
+/// walk meets together, land in different sets); a miss moves the set's first entry to its
+/// second.
 #[derive(Clone, Debug)]
-pub(crate) struct Walker {
+pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     q: QueryPoint,
     anchor: Anchor,
     /// The cylinder the walk is in.
@@ -479,11 +524,14 @@ pub(crate) struct Walker {
     full: bool,
     lap: u8,
     end: Option<(u8, KeyedAngle)>,
-    /// The tangents from `q` to the last few chain objects (round robin): consecutive
-    /// cylinders of a trace mostly share a chain, and the tangents depend only on the
-    /// object.
-    cache: [CachedTangents; TANGENT_CACHE],
-    next_slot: usize,
+    /// The tangent (vertex, ahead) of the last event, if it crossed a chain: its angle is θ
+    /// itself, never an exit (the new cylinder often has a chain of the same object, and
+    /// comparing an angle with itself costs the full perturbed predicate).
+    last: Option<(usize, bool)>,
+    /// The tangents from `q` to recent chain objects: consecutive cylinders of a trace
+    /// mostly share a chain, a walk comes back to the objects near the eye all around the
+    /// circle, and the tangents depend only on the object.
+    cache: [CachedTangents; K],
     /// Events taken so far; a walk takes at most `8 · cylinders + 8`: a lap enters each
     /// cylinder a bounded number of times, and a range walk of a ray tree goes round at
     /// most twice (more means the complex is inconsistent).
@@ -521,6 +569,21 @@ impl Walker {
         end: Option<Position>,
         ccw: bool,
     ) -> Walker {
+        Walker::with_cache(q, anchor, cur, from, end, ccw)
+    }
+}
+
+impl<const K: usize> Walker<K> {
+    /// [`Walker::new`] with a tangent cache of `K` entries.
+    pub(crate) fn with_cache(
+        q: QueryPoint,
+        anchor: Anchor,
+        cur: CylinderId,
+        from: Angle,
+        end: Option<Position>,
+        ccw: bool,
+    ) -> Walker<K> {
+        const { assert!(K >= 2 && K.is_multiple_of(2), "sets of two entries") };
         Walker {
             q,
             anchor,
@@ -529,8 +592,8 @@ impl Walker {
             full: false,
             lap: 0,
             end: end.map(|e| (e.lap, e.angle.keyed())),
-            cache: [(None, [(0, Bound::Lower); 2], 0); TANGENT_CACHE],
-            next_slot: 0,
+            last: None,
+            cache: [CachedTangents::EMPTY; K],
             steps: 0,
             ccw,
         }
@@ -539,7 +602,7 @@ impl Walker {
     /// A clockwise walk that starts at θ = 2π in `cur` (the cylinder just below it),
     /// where no [`Angle`] can start it: every angle of its lap lies ahead.
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-    pub(crate) fn at_top(mut self) -> Walker {
+    pub(crate) fn at_top(mut self) -> Walker<K> {
         self.full = !self.ccw;
         self
     }
@@ -597,14 +660,20 @@ impl Walker {
     /// The tangents from `q` to `object`, through the cache.
     #[inline]
     fn tangents(&mut self, scene: &SceneRef<'_>, object: ObjectId) -> ([(usize, Bound); 2], usize) {
-        if let Some(&(_, t, n)) = self.cache.iter().find(|e| e.0 == Some(object)) {
-            return (t, n);
+        // Fibonacci hashing: bits 16 and up of `id · 2³²/φ` pick the set.
+        let set = 2 * ((object.0.wrapping_mul(0x9e37_79b9) >> 16) as usize % (K / 2));
+        let ways = self.cache.get(set..set + 2).unwrap_or_default();
+        if let Some(e) = ways.iter().find(|e| e.object == Some(object)) {
+            return e.unpack();
         }
         let (t, n) = crate::line_space::tangents_from(scene, object, self.q);
-        if let Some(slot) = self.cache.get_mut(self.next_slot % TANGENT_CACHE) {
-            *slot = (Some(object), t, n);
+        if let (Some(new), Some([first, second])) = (
+            CachedTangents::pack(object, t, n),
+            self.cache.get_mut(set..set + 2),
+        ) {
+            *second = *first;
+            *first = new;
         }
-        self.next_slot = self.next_slot.wrapping_add(1);
         (t, n)
     }
 
@@ -641,7 +710,8 @@ impl Walker {
                 } else {
                     (forward.reversed().keyed(), false)
                 };
-                if a.cmp(&self.theta) == Ordering::Greater
+                if self.last != Some((h, ahead))
+                    && a.cmp(&self.theta) == Ordering::Greater
                     && best
                         .as_ref()
                         .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
@@ -672,6 +742,7 @@ impl Walker {
             Some(e) => self.cross(complex, scene, e, &angle.angle)?,
         };
         self.theta = angle;
+        self.last = exit.map(|e| (e.vertex, e.ahead));
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
@@ -703,7 +774,8 @@ impl Walker {
             let (found, count) = self.tangents(scene, chain.object);
             for &(h, bound) in found.iter().take(count) {
                 let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
-                if (self.full || a.cmp(&self.theta) == Ordering::Less)
+                if (self.full
+                    || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
                     && best
                         .as_ref()
                         .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
@@ -738,6 +810,7 @@ impl Walker {
         self.full = angle.is_none();
         let at = angle.map_or(Angle::ZERO, |a| a.angle);
         self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
+        self.last = exit.map(|e| (e.vertex, e.ahead));
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(at, exit, next)))

@@ -39,7 +39,9 @@ pub fn view<S: Storage>(
     scene: &SceneRef<'_>,
     q: QueryPoint,
 ) -> Result<Vec<ViewInterval>, WalkError> {
-    let mut out = Vec::new();
+    // Room for a typical view up front (a grid view from n = 1024 has about 50 intervals):
+    // growing from empty reallocates five times.
+    let mut out = Vec::with_capacity(view_capacity(scene.len()).min(64));
     sweep(complex, scene, q, &mut out)?;
     Ok(out)
 }
@@ -206,6 +208,8 @@ struct Cluster {
     angle: Angle,
     vertex: usize,
     after: Option<ObjectId>,
+    /// The cluster is that one event (see [`nearest_of_event`]).
+    single: bool,
 }
 
 /// The view as a stream over one walk, in constant space besides the output.
@@ -247,20 +251,28 @@ fn sweep<S: Storage>(
             angle: s.angle,
             vertex: v,
             after: ceiling,
+            single: true,
+        };
+        // A later event of a cluster: its ceiling, and the cluster has several.
+        let join = |c: &mut Cluster| {
+            c.after = ceiling;
+            c.single = false;
         };
         if in_lead && on_zero(&s.angle) {
-            let c = lead.get_or_insert(event);
-            c.after = ceiling;
+            match &mut lead {
+                Some(c) => join(c),
+                None => lead = Some(event),
+            }
             seen = ceiling;
             return;
         }
         in_lead = false;
         if let Some(t) = &mut tail {
-            t.after = ceiling;
+            join(t);
             return;
         }
         match &mut middle {
-            Some(m) if m.angle.cmp_exact(&s.angle) == Ordering::Equal => m.after = ceiling,
+            Some(m) if m.angle.cmp_exact(&s.angle) == Ordering::Equal => join(m),
             _ => {
                 if let Some(m) = middle.take() {
                     if result.is_ok() {
@@ -286,6 +298,7 @@ fn sweep<S: Storage>(
         (Some(t), Some(p)) => Some((
             Cluster {
                 after: p.after,
+                single: false,
                 ..t
             },
             seen,
@@ -327,7 +340,13 @@ fn emit(
     out: &mut impl Sink,
 ) -> Result<(), WalkError> {
     if c.after != *seen {
-        let vertex = nearest_on_ray(scene, q, &c.angle, [*seen, c.after]).or(Some(c.vertex));
+        let objects = [*seen, c.after];
+        let vertex = if c.single {
+            nearest_of_event(scene, q, &c.angle, c.vertex, objects)
+        } else {
+            nearest_on_ray(scene, q, &c.angle, objects)
+        };
+        let vertex = vertex.or(Some(c.vertex));
         out.push(ViewInterval {
             start: c.angle,
             object: c.after,
@@ -336,6 +355,62 @@ fn emit(
         *seen = c.after;
     }
     Ok(())
+}
+
+/// [`nearest_on_ray`] for a boundary made by one event, of the tangent vertex `h` (the
+/// cluster holds no other event), without scanning both objects: the nearest vertex on the
+/// ray is `h` or one on the line's run of collinear vertices through `h` in h's object H
+/// (H is convex and on one side of the line: it meets it in `h` or in an edge).
+///
+/// No vertex of the other object O can lie on the ray nearer than `h`. If O crossed the
+/// ray there (entering its interior before `h`), the rays just before and just after would
+/// both meet O first, and the view could not change at `h`; if O touched the ray there (a
+/// vertex, or an edge on the line), that tangent would be another event on this exact ray.
+/// H is one of the two objects seen on either side, as only its chain is crossed here; if
+/// `h` belongs to neither (which should not happen), both are scanned.
+fn nearest_of_event(
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    angle: &Angle,
+    h: usize,
+    objects: [Option<ObjectId>; 2],
+) -> Option<usize> {
+    let own = objects.iter().flatten().find_map(|id| {
+        let obj = scene.object(*id)?;
+        let i = h.checked_sub(obj.first_vertex())?;
+        (i < obj.len()).then_some((obj.first_vertex(), obj.len(), i))
+    });
+    let Some((first, n, i)) = own else {
+        return nearest_on_ray(scene, q, angle, objects);
+    };
+    let (dx, dy) = angle.vector();
+    // `Some(along)` for a vertex on the line, in multiples of |d|.
+    let along = |k: usize| {
+        let v = scene.vertices().get(k)?.to_query();
+        let (wx, wy) = (i128::from(v.x() - q.x()), i128::from(v.y() - q.y()));
+        (dx * wy == dy * wx).then_some(dx * wx + dy * wy)
+    };
+    // As the scan picks: the smallest `along`, then the smallest index.
+    let mut best: Option<(i128, usize)> = None;
+    let mut consider = |k: usize, a: i128| {
+        if a > 0 && best.is_none_or(|b| (a, k) < b) {
+            best = Some((a, k));
+        }
+    };
+    if let Some(a) = along(h) {
+        consider(h, a);
+    }
+    // The run on the line through `h`, both ways round the polygon (at most n vertices).
+    for forward in [true, false] {
+        for step in 1..n {
+            let j = (if forward { i + step } else { i + n - step }) % n;
+            match along(first + j) {
+                Some(a) => consider(first + j, a),
+                None => break,
+            }
+        }
+    }
+    best.map(|(_, k)| k)
 }
 
 /// The vertex nearest to `q` lying exactly on the ray from `q` in direction `angle`, among
@@ -352,15 +427,20 @@ fn nearest_on_ray(
         let Some(obj) = scene.object(*id) else {
             continue;
         };
-        for k in obj.first_vertex()..obj.first_vertex() + obj.len() {
-            let Some(v) = scene.vertices().get(k) else {
-                continue;
-            };
+        let first = obj.first_vertex();
+        let from_first = scene.vertices().get(first..).unwrap_or_default();
+        let vertices = from_first.get(..obj.len()).unwrap_or(from_first);
+        for (i, v) in vertices.iter().enumerate() {
             let v = v.to_query();
-            let (wx, wy) = (v.x() as i128 - q.x() as i128, v.y() as i128 - q.y() as i128);
+            // Differences of query coordinates: below 2⁵³, no overflow.
+            let (wx, wy) = (i128::from(v.x() - q.x()), i128::from(v.y() - q.y()));
+            // On the line first (rarely): `along` only for those.
+            if dx * wy != dy * wx {
+                continue;
+            }
             let along = dx * wx + dy * wy;
-            if dx * wy - dy * wx == 0 && along > 0 && best.is_none_or(|(b, _)| along < b) {
-                best = Some((along, k));
+            if along > 0 && best.is_none_or(|(b, _)| along < b) {
+                best = Some((along, first + i));
             }
         }
     }
