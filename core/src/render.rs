@@ -915,6 +915,9 @@ pub struct Hits {
     /// Levels `0..len` are remembered for `eye`.
     len: usize,
     levels: [Level; MAX_BRANCH],
+    /// Every call is known to take the same scene (a `Hits` local to [`centre_hits`]): the
+    /// remembered levels need not be checked against the scene's objects again.
+    same_scene: bool,
 }
 
 /// Edge `k` of a polygon (counter-clockwise), its endpoints and unit outward normal.
@@ -952,18 +955,25 @@ impl Side {
     /// The parameter where the ray `o + t·d` crosses this side of `poly`, if the side is
     /// still `poly`'s edge `k` and the ray enters the polygon through it (`leaving`: leaves
     /// it): then it is what [`clip_polygon`] returns for the side, the same arithmetic.
+    /// `same_scene`: `poly` is known to be the polygon the side was taken from.
     fn meet(
         &self,
         poly: &[crate::Point],
         o: (f64, f64),
         d: (f64, f64),
         leaving: bool,
+        same_scene: bool,
     ) -> Option<f64> {
-        let a = poly.get(self.k)?.to_f64();
-        let b = poly.get((self.k + 1) % poly.len())?.to_f64();
-        if a != self.a || b != self.b {
-            return None;
-        }
+        let (a, b) = if same_scene {
+            (self.a, self.b)
+        } else {
+            let a = poly.get(self.k)?.to_f64();
+            let b = poly.get((self.k + 1) % poly.len())?.to_f64();
+            if a != self.a || b != self.b {
+                return None;
+            }
+            (a, b)
+        };
         let nrm = (b.1 - a.1, a.0 - b.0);
         let num = nrm.0 * (a.0 - o.0) + nrm.1 * (a.1 - o.1);
         let den = nrm.0 * d.0 + nrm.1 * d.1;
@@ -1089,6 +1099,7 @@ impl Hits {
             eye: (f64::NAN, f64::NAN),
             len: 0,
             levels: [Level::EMPTY; MAX_BRANCH],
+            same_scene: false,
         }
     }
 
@@ -1145,13 +1156,15 @@ impl Hits {
             if lv.id != id || (level < last && !through) {
                 return None;
             }
-            let obj = scene.object(id)?;
-            let poly = scene.polygon(obj);
-            if obj.material != lv.material
-                || poly.get(lv.entry.k) != Some(&lin.pa)
-                || poly.get((lv.entry.k + 1) % poly.len()) != Some(&lin.pb)
-            {
-                return None;
+            if !self.same_scene {
+                let obj = scene.object(id)?;
+                let poly = scene.polygon(obj);
+                if obj.material != lv.material
+                    || poly.get(lv.entry.k) != Some(&lin.pa)
+                    || poly.get((lv.entry.k + 1) % poly.len()) != Some(&lin.pb)
+                {
+                    return None;
+                }
             }
             let den = dot(lin.wd, u);
             if !(den < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
@@ -1187,6 +1200,7 @@ impl Hits {
         if branch.is_empty() || l <= 0.0 {
             return None;
         }
+        let same_scene = self.same_scene;
         let mut e = self.eye;
         let mut o = e;
         let mut d = (dir.0 / l, dir.1 / l);
@@ -1198,7 +1212,10 @@ impl Hits {
             let poly = scene.polygon(obj);
             let lv = self.levels.get_mut(level)?;
             let reuse = *same && level < old && lv.id == id && lv.material == obj.material;
-            let t = match reuse.then(|| lv.entry.meet(poly, o, d, false)).flatten() {
+            let t = match reuse
+                .then(|| lv.entry.meet(poly, o, d, false, same_scene))
+                .flatten()
+            {
                 Some(t) => t,
                 None => {
                     *same = false;
@@ -1247,7 +1264,10 @@ impl Hits {
                         lv.inner = transform_eye_f64(e, lv.entry.a, nrm, eta);
                     }
                     let d1 = unit((p.0 - lv.inner.0, p.1 - lv.inner.1))?;
-                    let t2 = match (!fresh).then(|| lv.exit.meet(poly, p, d1, true)).flatten() {
+                    let t2 = match (!fresh)
+                        .then(|| lv.exit.meet(poly, p, d1, true, same_scene))
+                        .flatten()
+                    {
                         Some(t2) => t2,
                         None => {
                             *same = false;
@@ -1289,7 +1309,10 @@ pub fn centre_hits<I: Interval>(
     intervals: &[I],
     mut each: impl FnMut(usize, usize, Option<Hit>),
 ) {
-    let mut hits = Hits::new();
+    let mut hits = Hits {
+        same_scene: true,
+        ..Hits::new()
+    };
     let mut sweep = None;
     for (c, centre) in camera.centre_vectors().enumerate() {
         let k = if intervals.is_empty() {

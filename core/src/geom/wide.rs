@@ -23,6 +23,7 @@ pub(crate) struct Wide {
 impl Wide {
     /// The value of `mag`, whose limbs from `bound` on are zero. Zero is never negative
     /// and `len` is minimal, so that `==` is equality of values.
+    #[inline]
     fn new(negative: bool, mag: [u64; LIMBS], bound: usize) -> Wide {
         let len = mag.get(..bound.min(LIMBS)).map_or(0, |m| {
             m.len() - m.iter().rev().take_while(|&&l| l == 0).count()
@@ -62,11 +63,69 @@ impl Wide {
     }
 
     /// `self · k`, `None` past 2¹⁰²⁴.
+    #[inline]
     pub(crate) fn mul_i128(&self, k: i128) -> Option<Wide> {
-        let k = (k < 0, k.unsigned_abs());
-        let (k0, k1) = (k.1 as u64, (k.1 >> 64) as u64);
-        let mut mag = [0u64; LIMBS];
+        let mut out = Wide::default();
+        self.mul_into(k, &mut out)?;
+        Some(out)
+    }
+
+    /// `self · k + o · ko`, `None` past 2¹⁰²⁴: the products built in place, not moved.
+    #[inline]
+    pub(crate) fn mul_add(&self, k: i128, o: &Wide, ko: i128) -> Option<Wide> {
+        let (mut p, mut q) = (Wide::default(), Wide::default());
+        self.mul_into(k, &mut p)?;
+        o.mul_into(ko, &mut q)?;
+        p.add(&q)
+    }
+
+    /// `self · k` into `out`, which is zero.
+    #[inline]
+    fn mul_into(&self, k: i128, out: &mut Wide) -> Option<()> {
+        let neg = self.negative != (k < 0);
+        let k = k.unsigned_abs();
+        let (k0, k1) = (k as u64, (k >> 64) as u64);
         // Limbs above the highest nonzero one contribute nothing.
+        let used = usize::from(self.len);
+        if used + 2 > LIMBS {
+            *out = self.mul_near_limit(neg, k0, k1)?;
+            return Some(());
+        }
+        // The product has at most `used + 2` limbs: no overflow, no checks. Row by row, each
+        // limb product plus the limb below it and a carry fits in `u128`.
+        let mag = &mut out.mag;
+        let src = self.limbs();
+        let mut carry = 0u64;
+        for (slot, &l) in mag.iter_mut().zip(src) {
+            let acc = u128::from(l) * u128::from(k0) + u128::from(carry);
+            *slot = acc as u64;
+            carry = (acc >> 64) as u64;
+        }
+        if let Some(slot) = mag.get_mut(used) {
+            *slot = carry;
+        }
+        if k1 != 0 {
+            let mut carry = 0u64;
+            for (slot, &l) in mag.iter_mut().skip(1).zip(src) {
+                let acc = u128::from(l) * u128::from(k1) + u128::from(*slot) + u128::from(carry);
+                *slot = acc as u64;
+                carry = (acc >> 64) as u64;
+            }
+            if let Some(slot) = mag.get_mut(used + 1) {
+                *slot = carry;
+            }
+        }
+        let len = mag.get(..used + 2).map_or(0, |m| {
+            m.len() - m.iter().rev().take_while(|&&l| l == 0).count()
+        });
+        out.negative = neg && len > 0;
+        out.len = len as u8;
+        Some(())
+    }
+
+    /// [`Wide::mul_i128`] for a magnitude within two limbs of the budget, checked per limb.
+    fn mul_near_limit(&self, neg: bool, k0: u64, k1: u64) -> Option<Wide> {
+        let mut mag = [0u64; LIMBS];
         let used = usize::from(self.len);
         for (shift, kl) in [(0, k0), (1, k1)] {
             if kl == 0 {
@@ -98,17 +157,22 @@ impl Wide {
                 _ => {}
             }
         }
-        Some(Wide::new(self.negative != k.0, mag, used + 2))
+        Some(Wide::new(neg, mag, used + 2))
     }
 
     /// `self + o`, `None` past 2¹⁰²⁴.
+    #[inline]
     pub(crate) fn add(&self, o: &Wide) -> Option<Wide> {
         // Limbs above both operands' highest nonzero ones stay zero (but for a carry).
         let used = usize::from(self.len.max(o.len));
+        let (a, b) = (
+            self.mag.get(..used).unwrap_or(&self.mag),
+            o.mag.get(..used).unwrap_or(&o.mag),
+        );
         if self.negative == o.negative {
             let mut mag = [0u64; LIMBS];
             let mut carry = false;
-            for ((slot, &a), &b) in mag.iter_mut().zip(&self.mag).zip(&o.mag).take(used) {
+            for ((slot, &a), &b) in mag.iter_mut().zip(a).zip(b) {
                 let (s, c1) = a.overflowing_add(b);
                 let (s, c2) = s.overflowing_add(u64::from(carry));
                 *slot = s;
@@ -120,22 +184,23 @@ impl Wide {
             return Some(Wide::new(self.negative, mag, used + 1));
         }
         // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
-        let (big, small) = match cmp_mag(self, o) {
-            Ordering::Less => (o, self),
-            _ => (self, o),
+        let (big, small, negative) = match cmp_mag(self, o) {
+            Ordering::Less => (b, a, o.negative),
+            _ => (a, b, self.negative),
         };
         let mut mag = [0u64; LIMBS];
         let mut borrow = false;
-        for ((slot, &a), &b) in mag.iter_mut().zip(&big.mag).zip(&small.mag).take(used) {
+        for ((slot, &a), &b) in mag.iter_mut().zip(big).zip(small) {
             let (d, b1) = a.overflowing_sub(b);
             let (d, b2) = d.overflowing_sub(u64::from(borrow));
             *slot = d;
             borrow = b1 || b2;
         }
-        Some(Wide::new(big.negative, mag, used))
+        Some(Wide::new(negative, mag, used))
     }
 
     /// `self − o`.
+    #[cfg(test)]
     pub(crate) fn sub(&self, o: &Wide) -> Option<Wide> {
         self.add(&o.neg())
     }
@@ -159,12 +224,37 @@ impl Wide {
 
     /// `u.0 · v.1 − u.1 · v.0`.
     pub(crate) fn cross(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
-        u.0.mul_i128(v.1)?.sub(&u.1.mul_i128(v.0)?)
+        let (mut p, mut q) = (Wide::default(), Wide::default());
+        u.0.mul_into(v.1, &mut p)?;
+        u.1.mul_into(v.0, &mut q)?;
+        q.negative = !q.negative && q.len > 0;
+        p.add(&q)
+    }
+
+    /// The sign of [`Wide::cross`] (`None` exactly where it is): the two products compared,
+    /// without forming their difference.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
+        allow(dead_code)
+    )]
+    pub(crate) fn cross_sign(u: &(Wide, Wide), v: (i128, i128)) -> Option<Sign> {
+        let (mut p, mut q) = (Wide::default(), Wide::default());
+        u.0.mul_into(v.1, &mut p)?;
+        u.1.mul_into(v.0, &mut q)?;
+        // Opposite signs add the magnitudes, which may pass the budget.
+        if p.negative != q.negative && usize::from(p.len.max(q.len)) == LIMBS {
+            return Some(p.add(&q.neg())?.sign());
+        }
+        Some(match p.cmp(&q) {
+            Ordering::Greater => Sign::Positive,
+            Ordering::Equal => Sign::Zero,
+            Ordering::Less => Sign::Negative,
+        })
     }
 
     /// `u.0 · v.0 + u.1 · v.1`.
     pub(crate) fn dot(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
-        u.0.mul_i128(v.0)?.add(&u.1.mul_i128(v.1)?)
+        u.0.mul_add(v.0, &u.1, v.1)
     }
 }
 
@@ -211,6 +301,29 @@ pub(crate) fn residue_i128(v: i128) -> u64 {
     }
 }
 
+/// `v as f64` (nearest, ties to even), bit for bit, without the software `i128` conversion
+/// that dominates the `f64` placing of ray-tree range ends: through `i64` when `v` fits,
+/// else its 64 leading bits with the rest folded into the lowest one (a sticky bit: the
+/// 11 bits `f64` drops decide the rounding, and the folded bit only breaks an exact tie
+/// upwards when something below it is nonzero), converted and scaled by a power of two.
+pub(crate) fn i128_to_f64(v: i128) -> f64 {
+    if let Ok(v) = i64::try_from(v) {
+        return v as f64;
+    }
+    let m = v.unsigned_abs();
+    // `m ≥ 2⁶³`: drop `k ≤ 64` bits to keep 64.
+    let k = (128 - m.leading_zeros()).saturating_sub(64);
+    let sticky = m.trailing_zeros() < k;
+    let top = (m >> k) as u64 | u64::from(sticky);
+    // `2ᵏ` exactly (`k ≤ 64`), and the product is exact.
+    let r = top as f64 * f64::from_bits((1023 + u64::from(k)) << 52);
+    if v < 0 {
+        -r
+    } else {
+        r
+    }
+}
+
 /// Order of the magnitudes: the longer is larger, else the first differing limb from the top.
 fn cmp_mag(a: &Wide, b: &Wide) -> Ordering {
     a.len
@@ -224,6 +337,127 @@ mod tests {
 
     fn w(v: i128) -> Wide {
         Wide::from_i128(v)
+    }
+
+    #[test]
+    fn i128_to_f64_is_the_cast() {
+        let check = |v: i128| {
+            for v in [v, v.wrapping_neg()] {
+                assert_eq!(i128_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+            }
+        };
+        for v in [0, 1, i128::MAX, i128::MIN, i128::MIN + 1] {
+            check(v);
+        }
+        // Powers of two, ties and near-ties at the rounding bit of every length.
+        for s in 53..127 {
+            for d in [-3i128, -1, 0, 1, 3] {
+                check((1i128 << s) + d);
+                check((3i128 << (s - 1)) + d);
+                check((1i128 << s) + (1i128 << (s - 53)) + d);
+                check((1i128 << s) + (3i128 << (s - 53)) + d);
+            }
+        }
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for _ in 0..50_000 {
+            let v = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 128)) as i128;
+            check(v);
+            // The same with the bits below the rounding bit cleared: exact ties.
+            let k = 128 - v.unsigned_abs().leading_zeros();
+            if k > 54 {
+                let t = (v >> (k - 54)) << (k - 54);
+                check(t);
+                check(t + 1);
+                check(t - 1);
+            }
+        }
+    }
+
+    /// The unchecked product agrees with the limb-checked one (the original) at every
+    /// length, and sums with the difference of the product and its parts.
+    #[test]
+    fn fast_product_agrees_with_checked_product() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for round in 0..4000 {
+            let mut x = w(1);
+            let steps = round % 14;
+            for _ in 0..steps {
+                let k = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 100)) as i128;
+                x = x.mul_i128(k | 1).unwrap_or(x);
+            }
+            let k = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 128)) as i128;
+            for k in [k, -k, 0, 1, -1] {
+                let (neg, m) = (x.negative != (k < 0), k.unsigned_abs());
+                let slow = x.mul_near_limit(neg, m as u64, (m >> 64) as u64);
+                assert_eq!(x.mul_i128(k), slow, "round {round}");
+                let fused = slow.and_then(|p| p.add(&x.mul_i128(3 - k)?));
+                assert_eq!(x.mul_add(k, &x, 3 - k), fused, "round {round}");
+                if let Some(p) = slow {
+                    // p − x·k = 0 and p + (−p) = 0 through `add`'s two paths.
+                    assert_eq!(p.add(&p.neg()), Some(w(0)));
+                    let twice = p.add(&p);
+                    assert_eq!(twice, p.mul_i128(2), "round {round}");
+                    if let Some(t) = twice {
+                        assert_eq!(t.sub(&p), Some(p), "round {round}");
+                        assert_eq!(p.sub(&t), Some(p.neg()), "round {round}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cross_sign_is_the_sign_of_cross() {
+        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut big = |n: u64| {
+            let mut x = w(1);
+            for _ in 0..n {
+                let k = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 64)) as i128;
+                x = x.mul_i128(k | 1).unwrap_or(x);
+            }
+            x
+        };
+        for round in 0..3000u64 {
+            let (a, b) = (big(round % 12), big((round / 12) % 12));
+            let u = match round % 3 {
+                0 => (a, a.neg()),
+                1 => (a, a),
+                _ => (a, b),
+            };
+            let v = match round % 5 {
+                0 => (7, 7),
+                1 => (-(1 << 100), 3),
+                _ => (
+                    (round as i128) << (round % 90),
+                    -((round as i128 + 5) << (round % 70)),
+                ),
+            };
+            let plain = u.0.mul_i128(v.1).and_then(|p| p.sub(&u.1.mul_i128(v.0)?));
+            assert_eq!(Wide::cross(&u, v), plain, "round {round}");
+            assert_eq!(
+                Wide::cross_sign(&u, v),
+                plain.map(|c| c.sign()),
+                "round {round}"
+            );
+        }
     }
 
     #[test]

@@ -35,16 +35,39 @@ use crate::geom::{Point, QueryPoint};
 #[cfg(feature = "refraction")]
 use crate::scene::Eta;
 
+/// Euclidean quotient and remainder by a positive `d`: one division (`div_euclid` and
+/// `rem_euclid` are a software `i128` division each).
+fn div_rem(x: i128, d: i128) -> (i128, i128) {
+    let (q, r) = (x / d, x % d);
+    if r < 0 {
+        (q - 1, r + d)
+    } else {
+        (q, r)
+    }
+}
+
 /// `round(a + td/N + kn·g/(kd·N))` for one coordinate (see the module documentation).
 fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> i128 {
-    let (q1, r1) = (td.div_euclid(n), td.rem_euclid(n));
-    let (q2, r2) = (g.div_euclid(n), g.rem_euclid(n));
-    let kq = kn * q2;
-    let (q4, r4) = (kq.div_euclid(kd), kq.rem_euclid(kd));
-    let num = r4 * n + r1 * kd + kn * r2;
-    let den = kd * n;
-    let (j, s) = (num.div_euclid(den), num.rem_euclid(den));
-    let base = a + q1 + q4 + j;
+    // With `kd = 1` and `td + kn·g` in `i128` (a mirror: `kn = −1`, `< 2¹¹⁸`) the value is
+    // one fraction over `N`: the same floor and remainder with one division.
+    let one = (kd == 1)
+        .then(|| kn.checked_mul(g)?.checked_add(td))
+        .flatten();
+    let (base, s, den) = match one {
+        Some(num) => {
+            let (q, s) = div_rem(num, n);
+            (a + q, s, n)
+        }
+        None => {
+            let (q1, r1) = div_rem(td, n);
+            let (q2, r2) = div_rem(g, n);
+            let (q4, r4) = div_rem(kn * q2, kd);
+            let num = r4 * n + r1 * kd + kn * r2;
+            let den = kd * n;
+            let (j, s) = div_rem(num, den);
+            (a + q1 + q4 + j, s, den)
+        }
+    };
     match (2 * s).cmp(&den) {
         core::cmp::Ordering::Greater => base + 1,
         // Exactly half-way: away from zero.

@@ -38,7 +38,7 @@ use core::cmp::Ordering;
 use super::{Anchor, Position, Step, WalkError, Walker};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
-use crate::geom::wide::{mod_p, residue_i128, Wide, P};
+use crate::geom::wide::{i128_to_f64 as to_f64, mod_p, residue_i128, Wide, P};
 use crate::geom::{Point, QueryPoint, Sign};
 use crate::partition::{Complex, CylinderId, Storage};
 use crate::scene::{Material, ObjectId, SceneRef};
@@ -139,8 +139,8 @@ impl Dir {
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly.
     fn turn(&self, exacts: &[(Wide, Wide)], v: (i128, i128)) -> Sign {
-        match self.exact(exacts).and_then(|x| Wide::cross(x, v)) {
-            Some(c) => c.sign(),
+        match self.exact(exacts).and_then(|x| Wide::cross_sign(x, v)) {
+            Some(s) => s,
             None => Sign::of_i128(cross(self.angle.vector(), v)),
         }
     }
@@ -965,33 +965,33 @@ impl<S: Storage> Tree<'_, '_, S> {
             exacts: sc.exacts.len(),
             ..level
         };
-        let frame = match material {
+        match material {
             #[cfg(feature = "screens")]
-            Material::Screen => Frame::Walk(self.range_walk(here, c, p.from, p.to, p.boundary)?),
+            Material::Screen => {
+                self.push_range_walk(&mut sc.frames, here, c, p.from, p.to, p.boundary)
+            }
             #[cfg(feature = "mirrors")]
             Material::Mirror if level.depth > 0 => {
-                Frame::Split(Split::new(here, c, SplitKind::Mirror, p))
+                sc.frames
+                    .push(Frame::Split(Split::new(here, c, SplitKind::Mirror, p)))
             }
             #[cfg(feature = "refraction")]
-            Material::Refractive { eta } if level.depth > 0 => {
-                Frame::Split(Split::new(here, c, SplitKind::Entry(eta), p))
-            }
+            Material::Refractive { eta } if level.depth > 0 => sc
+                .frames
+                .push(Frame::Split(Split::new(here, c, SplitKind::Entry(eta), p))),
             // The ray type's code is compiled out (cargo features): an error, never a tree
             // that silently stops at the object.
-            _ if continues(material, level.depth) => {
-                return Err(WalkError::RayTypeDisabled {
-                    object: c,
-                    material,
-                })
-            }
+            _ if continues(material, level.depth) => Err(WalkError::RayTypeDisabled {
+                object: c,
+                material,
+            }),
             _ => {
                 sc.branch.push(c).map_err(|_| WalkError::TreeTooDeep)?;
                 let r = em.leaf(self, &sc.hops, &sc.branch, &p.boundary);
                 sc.branch.pop();
-                return r;
+                r
             }
-        };
-        sc.frames.push(frame)
+        }
     }
 
     /// The boundary made by a walk event at the given stage (hops) and level (branch index).
@@ -1204,21 +1204,21 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// numerator of `t` exact: no term is much larger than the result, so an eye next to
     /// the edge loses no precision (`X − prev` as `(a − prev) + u·(b − a)` cancels there).
     fn map_dir(&self, hops: &[Hop], eye: QueryPoint, dir: (i128, i128)) -> (f64, f64) {
-        let mut d = (dir.0 as f64, dir.1 as f64);
+        let mut d = (to_f64(dir.0), to_f64(dir.1));
         let mut cur = eye;
         for hop in hops.iter().rev() {
             let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
             let e = diff(b, a);
-            let ef = (e.0 as f64, e.1 as f64);
+            let ef = (to_f64(e.0), to_f64(e.1));
             let den = d.0 * ef.1 - d.1 * ef.0;
             d = if den == 0.0 {
                 // Along the edge's line: its midpoint.
                 let ap = diff(a, hop.prev);
-                (ap.0 as f64 + 0.5 * ef.0, ap.1 as f64 + 0.5 * ef.1)
+                (to_f64(ap.0) + 0.5 * ef.0, to_f64(ap.1) + 0.5 * ef.1)
             } else {
-                let t = cross(diff(a, cur), e) as f64 / den;
+                let t = to_f64(cross(diff(a, cur), e)) / den;
                 let cp = diff(cur, hop.prev);
-                (cp.0 as f64 + t * d.0, cp.1 as f64 + t * d.1)
+                (to_f64(cp.0) + t * d.0, to_f64(cp.1) + t * d.1)
             };
             cur = hop.prev;
         }
@@ -1310,7 +1310,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     let d = self.map_dir(later, rule.eye, rule.dir);
                     nearest_on_ray(candidates, |v| {
                         let w = diff(self.qpoint(v), eye);
-                        let wf = (w.0 as f64, w.1 as f64);
+                        let wf = (to_f64(w.0), to_f64(w.1));
                         let c = d.0 * wf.1 - d.1 * wf.0;
                         let scale = libm::hypot(d.0, d.1) * libm::hypot(wf.0, wf.1);
                         (libm::fabs(c) <= 1e-12 * scale).then_some(d.0 * wf.0 + d.1 * wf.1)
@@ -1506,7 +1506,21 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// else just before it; see [`Tree::locate_floor`]): walls exactly at `from` lie behind
     /// it; a wall exactly at θ = 0 that the perturbation puts just below 2π counts as 2π,
     /// and the line just before exactly θ = 0 lies below 2π, after every other wall.
-    fn contains_after(&self, eye: QueryPoint, from: &Angle, c: &Cylinder, ccw: bool) -> bool {
+    /// `known` holds chains whose [`Tree::chain_after`] the caller has already computed.
+    fn contains_after(
+        &self,
+        eye: QueryPoint,
+        from: &Angle,
+        c: &Cylinder,
+        ccw: bool,
+        known: &[(Chain, Sign)],
+    ) -> bool {
+        let chain_side = |ch: Chain| {
+            known
+                .iter()
+                .find(|(k, _)| *k == ch)
+                .map_or_else(|| self.chain_after(eye, from, ch, ccw), |&(_, s)| s)
+        };
         let top = !ccw && from.cmp_exact(&Angle::ZERO) == Ordering::Equal;
         let cmp_wall = |a: &Angle| {
             if wraps(a) {
@@ -1528,10 +1542,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         };
         wall(c.left, true)
             && wall(c.right, false)
-            && c.bottom
-                .is_none_or(|b| self.chain_after(eye, from, b, ccw) == Sign::Negative)
-            && c.top
-                .is_none_or(|t| self.chain_after(eye, from, t, ccw) == Sign::Positive)
+            && c.bottom.is_none_or(|b| chain_side(b) == Sign::Negative)
+            && c.top.is_none_or(|t| chain_side(t) == Sign::Positive)
     }
 
     /// The start cylinder found through the per-chain tilings: the cylinders with floor `m`
@@ -1572,15 +1584,28 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut id = self
             .complex
             .across(self.scene, first, side, Layer::After, &probe)?;
+        // The last chain crossed, on the eye's side of the line (for `contains_after`).
+        let mut crossed = (first, inward);
         for _ in 0..self.complex.cylinders().len() {
             let c = self.complex.cylinder(id)?;
             if c.floor != Some(m) {
                 return None;
             }
-            let next = match if up { c.top } else { c.bottom } {
-                Some(t) if self.chain_after(eye, from, t, ccw) != inward.flip() => t,
-                _ => return self.contains_after(eye, from, c, ccw).then_some(id),
+            let (next, next_side) = match if up { c.top } else { c.bottom } {
+                Some(t) => match self.chain_after(eye, from, t, ccw) {
+                    s if s != inward.flip() => (t, s),
+                    s => {
+                        let known = [crossed, (t, s)];
+                        return self.contains_after(eye, from, c, ccw, &known).then_some(id);
+                    }
+                },
+                None => {
+                    return self
+                        .contains_after(eye, from, c, ccw, &[crossed])
+                        .then_some(id)
+                }
             };
+            crossed = (next, next_side);
             // Beyond a chain whose object lies on the far side (above a lower chain, below
             // an upper one) that object is crossed: the layer ending there.
             let layer = if next.bound == start {
@@ -1597,14 +1622,14 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// its upper one.
     fn nearer_lower(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> bool {
         let d = from.vector();
-        let d = (d.0 as f64, d.1 as f64);
+        let d = (to_f64(d.0), to_f64(d.1));
         let Some(obj) = self.scene.object(m) else {
             return true;
         };
         let (lo, hi) = (obj.first_vertex()..obj.first_vertex() + obj.len())
             .map(|v| {
                 let w = diff(self.qpoint(v), eye);
-                d.0 * w.1 as f64 - d.1 * w.0 as f64
+                d.0 * to_f64(w.1) - d.1 * to_f64(w.0)
             })
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), u| {
                 (lo.min(u), hi.max(u))
@@ -1625,7 +1650,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             .cylinders()
             .iter()
             .enumerate()
-            .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw))
+            .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw, &[]))
             .and_then(|(i, _)| CylinderId::from_index(i))
             .ok_or(WalkError::NoStart)
     }
@@ -1634,18 +1659,21 @@ impl<S: Storage> Tree<'_, '_, S> {
 /// The walk behind a screen, mirror or refractive object.
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl<S: Storage> Tree<'_, '_, S> {
-    /// The frame that walks `(from, to)` (in `level`'s direction) from `level`'s eye
-    /// anchored to the floor `m`; its first piece starts with `first`.
-    fn range_walk(
+    /// Pushes the frame that walks `(from, to)` (in `level`'s direction) from `level`'s eye
+    /// anchored to the floor `m`; its first piece starts with `first`. Built in the push:
+    /// a frame (its walker) is large, and every move of it is a copy.
+    #[allow(clippy::too_many_arguments)]
+    fn push_range_walk<F: Frames>(
         &self,
+        frames: &mut F,
         level: Level,
         m: ObjectId,
         from: Dir,
         to: Dir,
         first: Boundary,
-    ) -> Result<RangeWalk, WalkError> {
+    ) -> Result<(), WalkError> {
         let eye = level.eye;
-        let (start, events) = if from.angle.cmp_exact(&to.angle) == Ordering::Equal {
+        let (start, walk) = if from.angle.cmp_exact(&to.angle) == Ordering::Equal {
             // Both ends placed on one direction (`map_range`): the range is thinner than
             // `f64` resolves and lies on one side of it, the side where the line meets
             // `m`'s sheet — just before the direction, else just after it. One piece;
@@ -1669,6 +1697,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                 // From the top of the circle everything is ahead.
                 None => 0,
             };
+            (start, Some((theta, lap)))
+        };
+        let walker = |(theta, lap): (Option<Angle>, u8)| {
             let walker = Walker::new(
                 eye,
                 Anchor::Floor(m),
@@ -1685,18 +1716,18 @@ impl<S: Storage> Tree<'_, '_, S> {
             } else {
                 walker
             };
-            (start, Some(Events::new(walker, false)))
+            Events::new(walker, false)
         };
-        Ok(RangeWalk {
+        frames.push(Frame::Walk(RangeWalk {
             level,
-            events,
+            events: walk.map(walker),
             seen: self.complex.ceiling(start),
             cur_from: from.clone(),
             from,
             to,
             cur_boundary: first,
             done: false,
-        })
+        }))
     }
 }
 
@@ -1798,7 +1829,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         if den == 0 {
             return Err(WalkError::Corrupt);
         }
-        let u = cross(d, diff(hop.prev, a)) as f64 / den as f64;
+        let u = to_f64(cross(d, diff(hop.prev, a))) / to_f64(den);
         // At or beyond an end of the edge (by rounding): that endpoint, exactly.
         if u <= 0.0 || u >= 1.0 {
             return Ok(self.toward(hop.next, if u <= 0.0 { hop.a } else { hop.b }));
@@ -1807,9 +1838,13 @@ impl<S: Storage> Tree<'_, '_, S> {
         // `map_dir`) in `f64`, scaled so that its larger component is about 2⁵²: the
         // direction keeps `f64` precision instead of the query grid's, so that a range far
         // thinner than a grid step at the edge keeps its two ends apart.
-        let t = cross(diff(a, hop.prev), e) as f64 / den as f64;
+        let num = cross(diff(a, hop.prev), e);
+        let t = to_f64(num) / to_f64(den);
         let pn = diff(hop.prev, hop.next);
-        let (fx, fy) = (pn.0 as f64 + t * d.0 as f64, pn.1 as f64 + t * d.1 as f64);
+        let (fx, fy) = (
+            to_f64(pn.0) + t * to_f64(d.0),
+            to_f64(pn.1) + t * to_f64(d.1),
+        );
         let big = libm::fmax(libm::fabs(fx), libm::fabs(fy));
         if !big.is_finite() || big == 0.0 {
             return Err(WalkError::Corrupt);
@@ -1824,22 +1859,15 @@ impl<S: Storage> Tree<'_, '_, S> {
             return Err(WalkError::Corrupt);
         }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
-        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`.
-        let exact = (|| {
-            let d = end
-                .exact(exacts)
-                .copied()
-                .unwrap_or((Wide::from_i128(d.0), Wide::from_i128(d.1)));
-            let den = Wide::cross(&d, e)?;
-            let num = cross(diff(a, hop.prev), e);
-            let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
-            let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
-            match den.sign() {
-                Sign::Negative => Some((x.neg(), y.neg())),
-                Sign::Zero => None,
-                Sign::Positive => Some((x, y)),
+        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`; from an end
+        // without an exact direction (`d` itself is exact) `den` is the one above.
+        let exact = match end.exact(exacts) {
+            Some(x) => Wide::cross(x, e).and_then(|den| scaled_hit(x, &den, num, pn)),
+            None => {
+                let x = (Wide::from_i128(d.0), Wide::from_i128(d.1));
+                scaled_hit(&x, &Wide::from_i128(den), num, pn)
             }
-        })();
+        };
         // Kept on the stack of exact directions until the frame walking it is popped.
         let exact = match exact {
             Some(x) => {
@@ -1860,7 +1888,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// `hop`, reversed if `flip` (mirrors). Mapped ends are placed to `f64` precision, so a
     /// range thinner than that can come out with both ends on one direction or crossed:
     /// it is then collapsed onto one direction, the end that points at a vertex if only
-    /// one does (`split_collapsed` and `range_walk` take a collapsed range as the ray just
+    /// one does (`split_collapsed` and `push_range_walk` take a collapsed range as the ray just
     /// before that direction).
     fn map_range(
         &self,
@@ -1945,9 +1973,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         let (x, y) = self.map_range(&mut sc.exacts, lo, hi, &hop, flip)?;
         let (from, to) = if here.ccw { (x, y) } else { (y, x) };
         sc.hops.push(hop).map_err(|_| WalkError::TreeTooDeep)?;
-        let frame = match kind {
+        match kind {
             #[cfg(feature = "refraction")]
-            SplitKind::Entry(eta) => Frame::Split(Split {
+            SplitKind::Entry(eta) => sc.frames.push(Frame::Split(Split {
                 level: here,
                 m,
                 kind: SplitKind::Exit(eta),
@@ -1956,17 +1984,16 @@ impl<S: Storage> Tree<'_, '_, S> {
                 first,
                 last: None,
                 done: false,
-            }),
+            })),
             _ => {
                 sc.branch.push(m).map_err(|_| WalkError::TreeTooDeep)?;
                 let deeper = Level {
                     depth: level.depth - 1,
                     ..here
                 };
-                Frame::Walk(self.range_walk(deeper, m, from, to, first)?)
+                self.push_range_walk(&mut sc.frames, deeper, m, from, to, first)
             }
-        };
-        sc.frames.push(frame)
+        }
     }
 
     /// The edges of `m` facing `eye` (`front`) or facing away from it: each as `(a, b)` in
@@ -1977,19 +2004,27 @@ impl<S: Storage> Tree<'_, '_, S> {
         eye: QueryPoint,
         m: ObjectId,
         front: bool,
-    ) -> impl Iterator<Item = ((usize, usize), (usize, usize), usize)> + Clone + '_ {
+    ) -> impl Iterator<Item = FacingEdge> + Clone + '_ {
         let (f, n) = self
             .scene
             .object(m)
             .map_or((0, 0), |o| (o.first_vertex(), o.len()));
-        (0..n).filter_map(move |k| {
-            let (ia, ib) = (f + k, f + (k + 1) % n);
-            match (front, side(self.qpoint(ia), self.qpoint(ib), eye)) {
-                (true, Sign::Negative) => Some(((ia, ib), (ib, ia), k)),
-                (false, Sign::Positive) => Some(((ia, ib), (ia, ib), k)),
-                _ => None,
-            }
-        })
+        (0..n).filter_map(move |k| facing(self, eye, (f, n), front, k))
+    }
+
+    /// Edge `k` of `m` as [`Tree::facing_edges`] yields it, if it faces that way.
+    fn facing_edge(
+        &self,
+        eye: QueryPoint,
+        m: ObjectId,
+        front: bool,
+        k: usize,
+    ) -> Option<FacingEdge> {
+        let o = self.scene.object(m)?;
+        if k >= o.len() {
+            return None;
+        }
+        facing(self, eye, (o.first_vertex(), o.len()), front, k)
     }
 
     /// The edge of a split of a range collapsed onto the direction of `hi`: the edge
@@ -2009,6 +2044,29 @@ impl<S: Storage> Tree<'_, '_, S> {
         let before = edges.clone().find(|&(_, c0, c1)| c0 > 0 && c1 >= 0);
         let edge = before.or_else(|| edges.clone().find(|&(_, c0, c1)| c0 >= 0 && c1 > 0));
         edge.map(|(e, _, _)| e)
+    }
+}
+
+/// A facing edge: `(a, b)` in the object's order, its endpoints counter-clockwise from the
+/// eye, and its index in the object (see [`Tree::facing_edges`]).
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+type FacingEdge = ((usize, usize), (usize, usize), usize);
+
+/// Edge `k` of the polygon of `n` vertices from global index `f`, as
+/// [`Tree::facing_edges`] yields it, if it faces `eye` (`front`) or faces away.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+fn facing<S: Storage>(
+    tree: &Tree<'_, '_, S>,
+    eye: QueryPoint,
+    (f, n): (usize, usize),
+    front: bool,
+    k: usize,
+) -> Option<FacingEdge> {
+    let (ia, ib) = (f + k, f + (k + 1) % n);
+    match (front, side(tree.qpoint(ia), tree.qpoint(ib), eye)) {
+        (true, Sign::Negative) => Some(((ia, ib), (ib, ia), k)),
+        (false, Sign::Positive) => Some(((ia, ib), (ia, ib), k)),
+        _ => None,
     }
 }
 
@@ -2062,7 +2120,7 @@ impl Split {
         };
         let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
         // Both ends on one direction (see `map_range`): the one edge the ray just before
-        // `hi` crosses, else the one just after it, as `range_walk` takes such a range.
+        // `hi` crosses, else the one just after it, as `push_range_walk` takes such a range.
         if cross(lv, hv) == 0 {
             self.done = true;
             let e = tree.split_collapsed(eye, self.m, hi, front)?;
@@ -2110,7 +2168,7 @@ impl Split {
             } else {
                 (k + n - 1) % n.max(1)
             };
-            let e = tree.facing_edges(eye, self.m, front).find(|e| e.2 == k)?;
+            let e = tree.facing_edge(eye, self.m, front, k)?;
             let (key, start, end) = piece((e.0, e.1))?;
             before(l, key).then_some((key, e.0, start, end, k))
         });
@@ -2145,9 +2203,29 @@ impl Split {
         };
         let we = match end {
             Some(v) => tree.toward(eye, v),
-            None => self.to.clone(),
+            // The piece reaches the end of the range: the facing edges' pieces are disjoint,
+            // so no later one is nonempty.
+            None => {
+                self.done = true;
+                self.to.clone()
+            }
         };
         Some((ws, we, boundary, edge))
+    }
+}
+
+/// The hit point of [`Tree::map_end`] relative to the next eye, exactly, scaled by the
+/// denominator's magnitude: `(prev − next)·den + num·d` (the direction `d` from `prev`, `num`
+/// the numerator of the hit's parameter, `pn = prev − next`); `None` for a zero
+/// denominator or past `Wide`'s budget.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+fn scaled_hit(d: &(Wide, Wide), den: &Wide, num: i128, pn: (i128, i128)) -> Option<(Wide, Wide)> {
+    let x = den.mul_add(pn.0, &d.0, num)?;
+    let y = den.mul_add(pn.1, &d.1, num)?;
+    match den.sign() {
+        Sign::Negative => Some((x.neg(), y.neg())),
+        Sign::Zero => None,
+        Sign::Positive => Some((x, y)),
     }
 }
 
