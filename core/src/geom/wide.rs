@@ -335,6 +335,16 @@ fn cmp_mag(a: &Wide, b: &Wide) -> Ordering {
 mod tests {
     use super::*;
 
+    /// Marsaglia's xorshift64 from `seed`.
+    fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        }
+    }
+
     fn w(v: i128) -> Wide {
         Wide::from_i128(v)
     }
@@ -358,13 +368,7 @@ mod tests {
                 check((1i128 << s) + (3i128 << (s - 53)) + d);
             }
         }
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1du64);
         for _ in 0..50_000 {
             let v = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 128)) as i128;
             check(v);
@@ -383,13 +387,7 @@ mod tests {
     /// length, and sums with the difference of the product and its parts.
     #[test]
     fn fast_product_agrees_with_checked_product() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
         for round in 0..4000 {
             let mut x = w(1);
             let steps = round % 14;
@@ -420,13 +418,7 @@ mod tests {
 
     #[test]
     fn cross_sign_is_the_sign_of_cross() {
-        let mut seed = 0x1234_5678_9abc_def1u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = xorshift(0x1234_5678_9abc_def1u64);
         let mut big = |n: u64| {
             let mut x = w(1);
             for _ in 0..n {

@@ -434,7 +434,7 @@ impl<S: Storage> Complex<S> {
         end: Option<Position>,
         step: &mut impl FnMut(&Step),
     ) -> Result<(), WalkError> {
-        let mut walker = Walker::<VIEW_TANGENT_CACHE>::with_cache(q, anchor, cur, from, end, true);
+        let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(q, anchor, cur, from, end, true);
         while let Some(s) = walker.next_step_in::<S, true>(self, scene)? {
             step(&s);
         }
@@ -560,24 +560,11 @@ fn ccw_before(a: (u8, &KeyedAngle), b: (u8, &KeyedAngle)) -> bool {
     a.0 < b.0 || (a.0 == b.0 && a.1.cmp(b.1) == core::cmp::Ordering::Less)
 }
 
-impl Walker {
-    /// A walk of the trace of `q` from cylinder `cur` at angle `from` (lap 0), until `end`
-    /// (see the type's documentation for laps and `None`).
-    pub(crate) fn new(
-        q: QueryPoint,
-        anchor: Anchor,
-        cur: CylinderId,
-        from: Angle,
-        end: Option<Position>,
-        ccw: bool,
-    ) -> Walker {
-        Walker::with_cache(q, anchor, cur, from, end, ccw)
-    }
-}
-
 impl<const K: usize> Walker<K> {
-    /// [`Walker::new`] with a tangent cache of `K` entries.
-    pub(crate) fn with_cache(
+    /// A walk of the trace of `q` from cylinder `cur` at angle `from` (lap 0), until `end`
+    /// (see the type's documentation for laps and `None`), with a tangent cache of `K`
+    /// entries.
+    pub(crate) fn new(
         q: QueryPoint,
         anchor: Anchor,
         cur: CylinderId,
@@ -1210,7 +1197,7 @@ mod tests {
             angle: Angle::ZERO,
         };
         for ccw in [true, false] {
-            let mut w = Walker::new(
+            let mut w: Walker = Walker::new(
                 q,
                 Anchor::Point,
                 start.unwrap(),
