@@ -302,16 +302,23 @@ impl<S: Storage> Complex<S> {
         if let Some(r) = self.region().filter(|r| !r.contains(q)) {
             return Err(WalkError::OutsideRegion(r));
         }
-        if self.region().is_none() {
-            if let Some(found) = self.trace_start_indexed(scene, q) {
-                return found;
+        // A pruned complex's cross-section at θ = 0 holds the start cylinder of every free
+        // point of its region, but not necessarily the cylinders that show a point is not
+        // free: there the objects are tested first.
+        let whole = self.region().is_none();
+        if !whole {
+            if let Some(l) = crate::partition::point_in_scene(scene, q) {
+                return Err(WalkError::NotFree(l));
             }
+        }
+        if let Some(found) = self.trace_start_indexed(scene, q, whole) {
+            return found;
         }
         self.trace_start_scan(scene, q)
     }
 
-    /// [`Complex::trace_start`] by scanning all objects and all cylinders at θ = 0 (for a
-    /// complex pruned to a region, whose cross-section at θ = 0 is incomplete).
+    /// [`Complex::trace_start`] by scanning all objects and all cylinders at θ = 0 (where
+    /// the index cannot answer: a corrupt complex).
     fn trace_start_scan(
         &self,
         scene: &SceneRef<'_>,
@@ -350,7 +357,8 @@ impl<S: Storage> Complex<S> {
     /// [`Complex::trace_start`] through the index of the cross-section at θ = 0
     /// ([`Complex::at_zero`]), in time following the cylinders stabbed at `q`'s height
     /// instead of all objects and all `3n + 1` cylinders there; `None` if the index cannot
-    /// answer (the caller scans). Needs the whole cross-section (no region).
+    /// answer (the caller scans). With `whole` (the complex is not pruned to a region) it
+    /// also decides whether `q` is free; otherwise the caller has.
     ///
     /// `q` is free unless an object contains it; such an object is the floor of a stabbed
     /// cylinder (the layer after it) when `q` lies strictly between its lowest and highest
@@ -361,6 +369,7 @@ impl<S: Storage> Complex<S> {
         &self,
         scene: &SceneRef<'_>,
         q: QueryPoint,
+        whole: bool,
     ) -> Option<Result<CylinderId, WalkError>> {
         use crate::partition::point_in_object;
         let (qx, qy) = (q.x(), q.y());
@@ -385,7 +394,8 @@ impl<S: Storage> Complex<S> {
                     .filter(|_| height(chain) == Some(qy))
                     .map(|ch| ch.object)
             };
-            for o in [c.floor, on(c.bottom), on(c.top)].into_iter().flatten() {
+            let objects = [c.floor, on(c.bottom), on(c.top)].into_iter().flatten();
+            for o in objects.filter(|_| whole) {
                 if let Some(l) = point_in_object(scene, o, q) {
                     not_free = Some(l);
                     return true;
@@ -405,6 +415,8 @@ impl<S: Storage> Complex<S> {
                     .is_some()
             {
                 found = Some(id);
+                // Without the freeness test, the start cylinder ends the search.
+                return !whole;
             }
             false
         });
@@ -1235,8 +1247,13 @@ mod tests {
             points.extend(s.vertices().iter().map(|v| v.to_query()));
             for q in points {
                 let scan = c.trace_start_scan(&s, q);
-                let indexed = c.trace_start_indexed(&s, q).expect("the index answers");
+                let indexed = c
+                    .trace_start_indexed(&s, q, true)
+                    .expect("the index answers");
                 assert_eq!(indexed, scan, "scene {k}, q = {q:?}");
+                if let Ok(id) = scan {
+                    assert_eq!(c.trace_start_indexed(&s, q, false), Some(Ok(id)));
+                }
                 match scan {
                     Ok(_) => free += 1,
                     Err(_) => not_free += 1,
