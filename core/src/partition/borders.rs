@@ -592,7 +592,7 @@ struct ZeroIndex<'a, 's> {
 }
 
 /// The height of a chain's point at θ = 0 (`None`: an object id out of range).
-fn zero_height(scene: &SceneRef<'_>, chain: Chain) -> Option<i64> {
+pub(crate) fn zero_height(scene: &SceneRef<'_>, chain: Chain) -> Option<i64> {
     let (lo, hi) = scene.object(chain.object)?.bbox();
     let p = match chain.bound {
         crate::line_space::Bound::Lower => lo,

@@ -40,6 +40,7 @@ mod sweep;
 #[cfg(feature = "alloc")]
 mod validate;
 
+pub(crate) use borders::zero_height;
 #[cfg(feature = "alloc")]
 pub use borders::Borders;
 pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer, Side};

@@ -332,14 +332,7 @@ impl<S: Storage> Complex<S> {
         // tangent lies below it (in y, from the bounding boxes: exact integers) cannot hold
         // `q`'s line; the exact, perturbed test runs on the few that remain.
         let qy = q.y();
-        let height = |chain: &Chain| {
-            let (lo, hi) = scene.object(chain.object)?.bbox();
-            let p = match chain.bound {
-                Bound::Lower => lo,
-                Bound::Upper => hi,
-            };
-            Some(p.to_query().y())
-        };
+        let height = |chain: &Chain| crate::partition::zero_height(scene, *chain);
         let zero = self
             .cylinders()
             .iter()
@@ -371,21 +364,13 @@ impl<S: Storage> Complex<S> {
         q: QueryPoint,
         whole: bool,
     ) -> Option<Result<CylinderId, WalkError>> {
-        use crate::partition::point_in_object;
+        use crate::partition::{point_in_object, zero_height};
         let (qx, qy) = (q.x(), q.y());
         let bbox = |o: ObjectId| {
             let (lo, hi) = scene.object(o)?.bbox();
             Some((lo.to_query(), hi.to_query()))
         };
-        let height = |chain: Option<Chain>| {
-            chain.and_then(|ch| {
-                let (lo, hi) = bbox(ch.object)?;
-                Some(match ch.bound {
-                    Bound::Lower => lo.y(),
-                    Bound::Upper => hi.y(),
-                })
-            })
-        };
+        let height = |chain: Option<Chain>| chain.and_then(|ch| zero_height(scene, ch));
         let mut found = None;
         let mut not_free = None;
         let answered = self.at_zero(scene, qy, |id, c| {
