@@ -21,7 +21,8 @@ use vcx::geom::sos::Angle;
 use vcx::geom::{Point, QueryPoint};
 use vcx::line_space::{Bound, Chain};
 use vcx::partition::{
-    BorderBuffers, BorderSizes, BufferTooSmall, Complex, Cylinder, CylinderId, Slices, Vertex,
+    BorderBuffers, BorderSizes, BufferTooSmall, Complex, Cylinder, CylinderId, Slices, Slots,
+    Vertex,
 };
 use vcx::render::{angle_order, coverage, Camera, FrameInterval, RenderError};
 use vcx::walk::{frame_tree_into, view_capacity, view_into, TreeScratch, ViewInterval, WalkError};
@@ -93,14 +94,17 @@ const CHAIN_ZERO: Chain = Chain {
     bound: Bound::Lower,
 };
 
-/// What `decode_into` fills: the scene part's scratch (free again after decoding) and the
-/// complex's vertices and cylinders, which the walk reads. Blank at start.
+/// What `decode_into` fills: the scratch of the scene part and of the replay of the
+/// cylinders (free again after decoding) and the complex's vertices and cylinders, which
+/// the walk reads. Blank at start.
 #[derive(Debug)]
 pub struct Arenas {
     /// Objects of the scene part (scratch).
     pub objects: [SceneObject; OBJECTS],
     /// Points of the scene part (scratch).
     pub points: [Point; SCENE_VERTICES],
+    /// The open cylinders while the cylinders are replayed (scratch).
+    pub open: [Slots; Scratch::open_len(OBJECTS)],
     /// Vertices of the complex.
     pub vertices: [Vertex; COMPLEX_VERTICES],
     /// Cylinders of the complex.
@@ -113,6 +117,7 @@ impl Arenas {
         Arenas {
             objects: [SceneObject::BLANK; OBJECTS],
             points: [ORIGIN; SCENE_VERTICES],
+            open: [[None; 2]; Scratch::open_len(OBJECTS)],
             vertices: [format::BLANK_VERTEX; COMPLEX_VERTICES],
             cylinders: [ZERO_CYLINDER; CYLINDERS],
         }
@@ -187,6 +192,7 @@ pub fn decode<'a>(bytes: &[u8], arenas: &'a mut Arenas) -> Result<File<'a>, Erro
     let scratch = Scratch {
         objects: &mut arenas.objects,
         points: &mut arenas.points,
+        open: &mut arenas.open,
     };
     format::decode_into(bytes, scratch, &mut arenas.vertices, &mut arenas.cylinders)
         .map_err(Error::Format)

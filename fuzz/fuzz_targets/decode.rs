@@ -25,13 +25,25 @@ enum Input {
         cut: Option<u16>,
         /// Recompute the checksum after the edits.
         reseal: bool,
+        /// Store every cylinder (version 1) instead of replaying them (version 3).
+        explicit_cylinders: bool,
     },
 }
 
-fn file(scene: &SceneSpec, edits: &[(u16, u8)], cut: Option<u16>, reseal: bool) -> Option<Vec<u8>> {
+fn file(
+    scene: &SceneSpec,
+    edits: &[(u16, u8)],
+    cut: Option<u16>,
+    reseal: bool,
+    explicit_cylinders: bool,
+) -> Option<Vec<u8>> {
     let s = scene.realize().scene().ok()?;
     let c = build_by_sweep(&s.as_ref()).ok()?;
-    let mut bytes = format::encode(&s.as_ref(), &c, None, &EncodeOptions::default()).ok()?;
+    let options = EncodeOptions {
+        explicit_cylinders,
+        ..EncodeOptions::default()
+    };
+    let mut bytes = format::encode(&s.as_ref(), &c, None, &options).ok()?;
     for &(at, x) in edits {
         let i = usize::from(at) % bytes.len();
         bytes[i] ^= x;
@@ -55,7 +67,8 @@ fuzz_target!(|input: Input| {
             edits,
             cut,
             reseal,
-        } => match file(scene, edits, *cut, *reseal) {
+            explicit_cylinders,
+        } => match file(scene, edits, *cut, *reseal, *explicit_cylinders) {
             Some(b) => b,
             None => return,
         },

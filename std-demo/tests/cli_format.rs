@@ -52,13 +52,18 @@ fn build_writes_and_inspect_reads() {
     let file = build(&scene, &["--seed", "5"]);
     let len = std::fs::metadata(&file).unwrap().len();
     let text = stdout(&vcx(&["inspect", s(&file)]));
-    assert!(text.contains("vcx complex format version 1"), "{text}");
+    // Without history: version 3, only the cylinders at θ = 0 stored.
+    assert!(text.contains("vcx complex format version 3"), "{text}");
     assert!(text.contains("seed 5"), "{text}");
     for part in ["header", "scene", "complex", "history  absent", "checksum"] {
         assert!(text.contains(part), "{part}: {text}");
     }
     let j: Value = serde_json::from_str(&stdout(&vcx(&["inspect", s(&file), "--json"]))).unwrap();
-    assert_eq!(j["version"], 1);
+    assert_eq!(j["version"], 3);
+    assert_eq!(
+        j["parts"]["complex"]["stored_cylinders"].as_u64(),
+        Some(3 * 64 + 1)
+    );
     assert_eq!(j["bytes"].as_u64(), Some(len));
     assert_eq!(j["seed"], 5);
     assert_eq!(j["parts"]["scene"]["objects"], 64);
@@ -244,14 +249,14 @@ fn corrupt_files_are_one_line_errors() {
     rejects(&["view", s(&p), "--at", "1,1"], &p, &["truncated"]);
     let p = write("short.vcx", &good[..3]);
     rejects(&["check", s(&p)], &p, &["3 bytes"]);
-    // An unknown version (2 is the region format of `vcx build --region`).
-    let mut v3 = good.clone();
-    v3[4] = 3;
-    let p = write("v3.vcx", &v3);
+    // An unknown version (2 is the region format of `vcx build --region`, 3 the default).
+    let mut v4 = good.clone();
+    v4[4] = 4;
+    let p = write("v4.vcx", &v4);
     rejects(
         &["check", s(&p)],
         &p,
-        &["format version 3", "byte 4", "supports versions 1 to 2"],
+        &["format version 4", "byte 4", "supports versions 1 to 3"],
     );
     // A `.vcx` file that is not one.
     let p = write("json.vcx", b"{\"objects\": []}");

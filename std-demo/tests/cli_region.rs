@@ -1,4 +1,5 @@
-//! `vcx build --region X0,Y0,X1,Y1`, run as the built binary: the pruned file is smaller,
+//! `vcx build --region X0,Y0,X1,Y1`, run as the built binary: the pruned file holds fewer
+//! cylinders and is smaller than the whole complex stored the same way,
 //! `vcx inspect` shows its region, `vcx view` from inside the box prints exactly what the
 //! full file prints, from outside it fails with one `error:` line and exit status 2, as do
 //! every refused combination (history, mirrors, a malformed or empty box); `vcx bench
@@ -29,11 +30,28 @@ fn files() -> (PathBuf, PathBuf) {
 #[test]
 fn region_file_is_smaller_and_inspect_shows_it() {
     let (full, reg) = files();
+    // Against the whole complex with every cylinder stored, as the region file stores its
+    // own (the default version 3 replays the cylinders instead, which a pruned complex
+    // cannot).
+    let explicit = temp_path("explicit.vcx");
+    ok(&[
+        "build",
+        s(&example("grid")),
+        "--explicit-cylinders",
+        "-o",
+        s(&explicit),
+    ]);
     let (a, b) = (
-        std::fs::metadata(&full).unwrap().len(),
+        std::fs::metadata(&explicit).unwrap().len(),
         std::fs::metadata(&reg).unwrap().len(),
     );
     assert!(b < a / 2, "{b} bytes pruned, {a} full");
+    let cylinders = |p: &PathBuf| {
+        json(&ok(&["inspect", s(p), "--json"]))["parts"]["complex"]["cylinders"]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(cylinders(&reg) < cylinders(&full) / 2);
     let text = ok(&["inspect", s(&reg)]);
     assert!(text.contains("format version 2"), "{text}");
     assert!(
@@ -45,6 +63,8 @@ fn region_file_is_smaller_and_inspect_shows_it() {
     assert_eq!(v["version"], 2);
     assert_eq!(v["region"], serde_json::json!([30.0, 30.0, 50.0, 50.0]));
     let v = json(&ok(&["inspect", s(&full), "--json"]));
+    assert_eq!(v["version"], 3);
+    let v = json(&ok(&["inspect", s(&explicit), "--json"]));
     assert_eq!(v["version"], 1);
     assert_eq!(v["region"], Value::Null);
     // --stats-json reports both counts.

@@ -32,15 +32,72 @@ fn small_scene() -> Scene {
     Scene::new([(Material::Opaque, &a[..]), (glass, &b[..])]).unwrap()
 }
 
+/// The golden scene's file as written by default: version 3, the cylinders replayed.
 fn small_file() -> (Scene, Complex, Vec<u8>) {
+    small_file_as(false)
+}
+
+/// The golden scene's file with every cylinder stored (version 1).
+fn small_file_v1() -> (Scene, Complex, Vec<u8>) {
+    small_file_as(true)
+}
+
+fn small_file_as(explicit_cylinders: bool) -> (Scene, Complex, Vec<u8>) {
     let s = small_scene();
     let c = build_by_sweep(&s.as_ref()).unwrap();
     let options = EncodeOptions {
         seed: Some(7),
         compacted: true,
+        explicit_cylinders,
     };
     let bytes = encode(&s.as_ref(), &c, None, &options).unwrap();
     (s, c, bytes)
+}
+
+/// Both small files, named.
+fn small_files() -> [(&'static str, Vec<u8>); 2] {
+    [
+        ("version 3", small_file().2),
+        ("version 1", small_file_v1().2),
+    ]
+}
+
+/// Whether two complexes are the same partition up to the numbering of their cylinders:
+/// the same vertices, and the same cylinders with the same neighbours, each named by its
+/// floor, ceiling, chains and walls.
+fn same_partition(a: &Complex, b: &Complex) -> bool {
+    type Key = (
+        Option<ObjectId>,
+        Option<ObjectId>,
+        Option<vcx::line_space::Chain>,
+        Option<vcx::line_space::Chain>,
+        String,
+    );
+    fn described(c: &Complex) -> Vec<(Key, Option<Key>, Option<Key>)> {
+        let key = |i: usize| {
+            let y = &c.cylinders()[i];
+            (
+                y.floor,
+                y.ceiling,
+                y.bottom,
+                y.top,
+                format!("{:?}-{:?}", y.left, y.right),
+            )
+        };
+        let mut all: Vec<_> = (0..c.cylinders().len())
+            .map(|i| {
+                let y = &c.cylinders()[i];
+                (
+                    key(i),
+                    y.left_neighbour.map(|n| key(n.index())),
+                    y.right_neighbour.map(|n| key(n.index())),
+                )
+            })
+            .collect();
+        all.sort();
+        all
+    }
+    a.vertices() == b.vertices() && described(a) == described(b)
 }
 
 /// Recomputes the checksum after an edit, so the structural checks are what is tested.
@@ -124,7 +181,13 @@ fn round_trip(
     assert_eq!(dr.vertices(), sr.vertices());
     assert_eq!(dr.objects(), sr.objects());
     assert_eq!(loaded.complex.vertices(), c.vertices());
-    assert_eq!(loaded.complex.cylinders(), c.cylinders());
+    // Version 3 numbers the replayed cylinders as the sweep does: the same partition, and
+    // the same numbering when the sweep built it.
+    assert_eq!(loaded.header.version, format::VERSION_REPLAY);
+    assert!(same_partition(&loaded.complex, c));
+    if c.cylinders() == build_by_sweep(&sr).unwrap().cylinders() {
+        assert_eq!(loaded.complex.cylinders(), c.cylinders());
+    }
     loaded.complex.validate(&dr).unwrap();
     assert_eq!(loaded.header.seed, None);
     let screens = sr.objects().iter().any(|o| o.material == Material::Screen);
@@ -163,10 +226,20 @@ fn round_trip(
 // ---------------------------------------------------------------------------------------
 // Golden bytes.
 
-/// The encoding of [`small_scene`] built by the sweep, seed 7, compacted, in hex. To
-/// regenerate after an intended format change (which must bump `format::VERSION`, see
-/// docs/format.md): run this test and copy the hex lines of the failure message.
+/// The encoding of [`small_scene`] built by the sweep, seed 7, compacted, in hex, as
+/// written by default (version 3: vertices and the cylinders at θ = 0). To regenerate
+/// after an intended format change (which must bump the version, see docs/format.md): run
+/// this test and copy the hex lines of the failure message.
 const GOLDEN: &str = "\
+    5643580003000300030000000200000006000000080000001f00000000000000\
+    000000000700000000000000210000002c000000000000000003028080060300\
+    0080802000008080188080500080804080802880806080802002050105030203\
+    0105020501020301030000000300020301000101020102010200020204020003\
+    04000004004f2cc6c0";
+
+/// The same file with every cylinder stored (`explicit_cylinders`, version 1): its bytes
+/// have not changed since version 1 was defined.
+const GOLDEN_V1: &str = "\
     5643580001000300030000000200000006000000080000001f00000000000000\
     0000000007000000000000002100000008010000000000000003028080060300\
     0080802000008080188080500080804080802880806080802002050105030203\
@@ -198,27 +271,37 @@ fn unhex(text: &str) -> Vec<u8> {
 
 #[test]
 fn golden_bytes() {
-    let (s, c, bytes) = small_file();
-    let golden = unhex(GOLDEN);
-    assert!(
-        bytes == golden,
-        "the encoding changed ({} bytes); got\n{}",
-        bytes.len(),
-        hex_lines(&bytes)
-    );
-    // The golden file decodes to the same complex.
-    let loaded = decode(&golden).unwrap();
-    assert_eq!(loaded.complex.cylinders(), c.cylinders());
-    assert_eq!(loaded.scene.as_ref().vertices(), s.as_ref().vertices());
-    assert_eq!(loaded.header.seed, Some(7));
-    assert!(loaded.header.compacted);
+    for (version, golden, (s, c, bytes)) in [
+        (format::VERSION_REPLAY, GOLDEN, small_file()),
+        (format::VERSION, GOLDEN_V1, small_file_v1()),
+    ] {
+        let golden = unhex(golden);
+        assert!(
+            bytes == golden,
+            "the encoding of version {version} changed ({} bytes); got\n{}",
+            bytes.len(),
+            hex_lines(&bytes)
+        );
+        // The golden file decodes to the same complex.
+        let loaded = decode(&golden).unwrap();
+        assert_eq!(loaded.header.version, version);
+        assert_eq!(loaded.complex.cylinders(), c.cylinders());
+        assert_eq!(loaded.scene.as_ref().vertices(), s.as_ref().vertices());
+        assert_eq!(loaded.header.seed, Some(7));
+        assert!(loaded.header.compacted);
+    }
+    // Version 3 stores 4 of every cylinder's 8 ids, and only for those at θ = 0.
+    assert!(unhex(GOLDEN).len() * 2 < unhex(GOLDEN_V1).len());
 }
 
 #[test]
 fn header_layout() {
     let (s, c, bytes) = small_file();
     assert_eq!(&bytes[..4], b"VCX\0");
-    assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), format::VERSION);
+    assert_eq!(
+        u16::from_le_bytes([bytes[4], bytes[5]]),
+        format::VERSION_REPLAY
+    );
     let h = Header::read(&bytes).unwrap();
     assert_eq!(h.objects as usize, s.as_ref().len());
     assert_eq!(h.scene_vertices as usize, s.as_ref().vertices().len());
@@ -328,6 +411,7 @@ fn decode_into_fixed_storage() {
     let (s, c, bytes) = small_file();
     let mut objects = [SceneObject::BLANK; 8];
     let mut points = [Point::default(); 32];
+    let mut open = [[None; 2]; Scratch::open_len(8)];
     let mut vertices = [BLANK_VERTEX; 64];
     let mut cylinders = [BLANK_CYLINDER; 256];
     let d = decode_into::<32, 8>(
@@ -335,6 +419,7 @@ fn decode_into_fixed_storage() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut open,
         },
         &mut vertices,
         &mut cylinders,
@@ -353,6 +438,7 @@ fn decode_into_fixed_storage() {
         &EncodeOptions {
             seed: Some(7),
             compacted: true,
+            explicit_cylinders: false,
         },
         &mut out,
     )
@@ -364,6 +450,7 @@ fn decode_into_fixed_storage() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut open,
         },
         &mut vertices,
         &mut small,
@@ -378,6 +465,7 @@ fn decode_into_fixed_storage() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut open,
         },
         &mut vertices,
         &mut cylinders,
@@ -393,6 +481,39 @@ fn decode_into_fixed_storage() {
         ),
         "{e:?}"
     );
+    // Too few open-cylinder slots for the replay (version 3 only).
+    let e = decode_into::<32, 8>(
+        &bytes,
+        Scratch {
+            objects: &mut objects,
+            points: &mut points,
+            open: &mut open[..3],
+        },
+        &mut vertices,
+        &mut cylinders,
+    )
+    .unwrap_err();
+    assert_eq!(
+        e,
+        FormatError::Capacity {
+            arena: Arena::OpenSlot,
+            needed: Scratch::open_len(s.as_ref().len()),
+            capacity: 3
+        }
+    );
+    let (_, _, v1) = small_file_v1();
+    let d = decode_into::<32, 8>(
+        &v1,
+        Scratch {
+            objects: &mut objects,
+            points: &mut points,
+            open: &mut [],
+        },
+        &mut vertices,
+        &mut cylinders,
+    )
+    .unwrap();
+    assert_eq!(d.cylinders, c.cylinders());
     // Too small an output buffer.
     let e = encode_into(
         &s.as_ref(),
@@ -431,7 +552,12 @@ fn check_survivor(loaded: &format::Loaded) {
 
 #[test]
 fn every_truncation_is_an_error() {
-    let (_, _, bytes) = small_file();
+    for (_, bytes) in small_files() {
+        truncations(&bytes);
+    }
+}
+
+fn truncations(bytes: &[u8]) {
     for len in 0..bytes.len() {
         let cut = &bytes[..len];
         assert!(decode(cut).is_err(), "truncated to {len} bytes: decoded");
@@ -445,7 +571,7 @@ fn every_truncation_is_an_error() {
     for cut in format::HEADER_LEN..bytes.len() - 4 {
         let mut b = bytes[..cut].to_vec();
         b.extend_from_slice(&[0; 4]);
-        let h = Header::read_unchecked(&bytes).unwrap();
+        let h = Header::read_unchecked(bytes).unwrap();
         let shorter = (bytes.len() - b.len()) as u32;
         if shorter <= h.complex_bytes {
             set_u32(
@@ -468,7 +594,7 @@ fn every_truncation_is_an_error() {
     }
     assert_eq!(ended, bytes.len() - 4 - format::HEADER_LEN);
     // Bytes appended.
-    let mut longer = bytes.clone();
+    let mut longer = bytes.to_vec();
     longer.push(0);
     assert!(matches!(decode(&longer), Err(FormatError::Length { .. })));
 }
@@ -512,16 +638,22 @@ fn flip_every_bit(what: &str, bytes: &[u8], check: fn(&format::Loaded)) {
 
 #[test]
 fn every_bit_flip_is_an_error() {
-    let (_, _, bytes) = small_file();
-    flip_every_bit("small file", &bytes, check_survivor);
+    for (what, bytes) in small_files() {
+        flip_every_bit(what, &bytes, check_survivor);
+    }
 }
 
 #[test]
 fn random_multi_byte_damage_never_panics() {
-    let (_, _, bytes) = small_file();
+    for (_, bytes) in small_files() {
+        multi_byte_damage(&bytes);
+    }
+}
+
+fn multi_byte_damage(bytes: &[u8]) {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     for _ in 0..3000 {
-        let mut b = bytes.clone();
+        let mut b = bytes.to_vec();
         for _ in 0..rng.gen_range(1..6) {
             let i = rng.gen_range(format::HEADER_LEN..b.len());
             b[i] = rng.gen();
@@ -535,7 +667,12 @@ fn random_multi_byte_damage_never_panics() {
 
 #[test]
 fn counts_inflated_to_the_maximum() {
-    let (_, _, bytes) = small_file();
+    for (_, bytes) in small_files() {
+        inflated_counts(bytes);
+    }
+}
+
+fn inflated_counts(bytes: Vec<u8>) {
     use format::offset::*;
     for (field, at) in [
         ("objects", OBJECTS),
@@ -587,18 +724,34 @@ fn counts_inflated_to_the_maximum() {
 fn unknown_version_flags_and_parts() {
     let (_, _, bytes) = small_file();
     let mut b = bytes.clone();
-    // Version 2 is the region format (tests/tests/region.rs); 3 is unknown.
-    b[4..6].copy_from_slice(&3u16.to_le_bytes());
+    // Version 2 is the region format (tests/tests/region.rs), 3 the replayed one; 4 is
+    // unknown.
+    b[4..6].copy_from_slice(&4u16.to_le_bytes());
     reseal(&mut b);
     let e = decode(&b).unwrap_err();
     assert_eq!(
         e,
         FormatError::UnsupportedVersion {
-            found: 3,
-            supported: format::VERSION_REGION
+            found: 4,
+            supported: format::VERSION_REPLAY
         }
     );
-    assert!(e.to_string().contains("version 3"), "{e}");
+    assert!(e.to_string().contains("version 4"), "{e}");
+    // The same bytes read as version 1: the complex part is too short for its cylinders.
+    let mut b = bytes.clone();
+    b[4..6].copy_from_slice(&1u16.to_le_bytes());
+    reseal(&mut b);
+    assert!(
+        matches!(
+            decode(&b),
+            Err(FormatError::Count {
+                field: "cylinders",
+                ..
+            })
+        ),
+        "{:?}",
+        decode(&b)
+    );
     // Version 2 without its region flag.
     let mut b = bytes.clone();
     b[4..6].copy_from_slice(&2u16.to_le_bytes());
@@ -627,8 +780,16 @@ fn unknown_version_flags_and_parts() {
         decode(&b).unwrap_err(),
         FormatError::UnknownParts { bits: 1 << 5 }
     );
-    // The history bit without history counts: an inconsistent header.
+    // Version 3 has no history part.
     let mut b = bytes.clone();
+    b[8] |= 1 << 2;
+    reseal(&mut b);
+    assert_eq!(
+        decode(&b).unwrap_err(),
+        FormatError::UnknownParts { bits: 1 << 2 }
+    );
+    // The history bit without history counts (version 1): an inconsistent header.
+    let mut b = small_file_v1().2;
     b[8] |= 1 << 2;
     reseal(&mut b);
     assert!(
@@ -657,8 +818,19 @@ fn unknown_version_flags_and_parts() {
     ));
 }
 
-/// Writes arenas edited to be wrong (the encoder trusts its input) and decodes.
+/// Writes arenas edited to be wrong (the encoder trusts its input) as version 1 (every
+/// cylinder stored) and decodes.
 fn decode_edited(
+    s: &Scene,
+    c: &Complex,
+    edit: impl FnOnce(&mut Vec<vcx::partition::Vertex>, &mut Vec<vcx::partition::Cylinder>),
+) -> FormatError {
+    decode_edited_as(true, s, c, edit)
+}
+
+/// [`decode_edited`], as version 3 unless `explicit_cylinders`.
+fn decode_edited_as(
+    explicit_cylinders: bool,
     s: &Scene,
     c: &Complex,
     edit: impl FnOnce(&mut Vec<vcx::partition::Vertex>, &mut Vec<vcx::partition::Cylinder>),
@@ -666,16 +838,22 @@ fn decode_edited(
     let (mut v, mut cy) = (c.vertices().to_vec(), c.cylinders().to_vec());
     edit(&mut v, &mut cy);
     let mut out = vec![0u8; 1 << 16];
-    let n = encode_into(&s.as_ref(), &v, &cy, &EncodeOptions::default(), &mut out).unwrap();
+    let options = EncodeOptions {
+        explicit_cylinders,
+        ..Default::default()
+    };
+    let n = encode_into(&s.as_ref(), &v, &cy, &options, &mut out).unwrap();
     let e = decode(&out[..n]).unwrap_err();
     // The same checks without allocation.
     let mut objects = [SceneObject::BLANK; 8];
     let mut points = [Point::default(); 32];
+    let mut open = [[None; 2]; Scratch::open_len(8)];
     let mut vs = [BLANK_VERTEX; 64];
     let mut cs = [BLANK_CYLINDER; 256];
     let scratch = Scratch {
         objects: &mut objects,
         points: &mut points,
+        open: &mut open,
     };
     if let Err(e2) = decode_into::<32, 8>(&out[..n], scratch, &mut vs, &mut cs) {
         assert_eq!(e2, e);
@@ -860,6 +1038,92 @@ fn broken_links_are_named() {
     assert!(matches!(e, FormatError::Complex { .. }), "{e:?}");
 }
 
+/// Version 3: vertices and cylinders at θ = 0 that do not replay into a partition are
+/// named (the vertex, or the cylinder at θ = 0, and its byte offset).
+#[test]
+fn replay_failures_are_named() {
+    let (s, c, _) = small_file();
+    let at_zero = |cy: &[vcx::partition::Cylinder]| {
+        cy.iter()
+            .enumerate()
+            .filter(|(_, c)| c.left == Wall::Zero)
+            .map(|(i, _)| i)
+            .collect::<Vec<_>>()
+    };
+    let zero = at_zero(c.cylinders());
+    assert_eq!(zero.len(), 3 * s.as_ref().len() + 1);
+    // A vertex left out (and three cylinders, so the counts agree): some later vertex
+    // closes a corner face that is not open, or the cylinders open at 2π do not match.
+    let e = decode_edited_as(false, &s, &c, |v, cy| {
+        v.remove(1);
+        cy.truncate(cy.len() - 3);
+    });
+    assert!(
+        matches!(
+            e,
+            FormatError::Element {
+                arena: Arena::Vertex | Arena::Cylinder,
+                problem: Problem::Replay(_),
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("do not replay"), "{e}");
+    // Every vertex removed but the first: the first replays, the wrap at 2π does not.
+    let e = decode_edited_as(false, &s, &c, |v, cy| {
+        let n = v.len();
+        v.truncate(1);
+        cy.truncate(cy.len() - 3 * (n - 1));
+    });
+    assert!(
+        matches!(
+            e,
+            FormatError::Element {
+                problem: Problem::Replay(_),
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // A cylinder at θ = 0 copied over another: three on one chain.
+    let (a, b) = (zero[1], zero[2]);
+    let e = decode_edited_as(false, &s, &c, |_, cy| {
+        let copy = cy[a];
+        cy[b] = copy;
+    });
+    assert!(
+        matches!(
+            e,
+            FormatError::Element {
+                problem: Problem::Replay(_) | Problem::NotSymmetric,
+                ..
+            } | FormatError::Complex { .. }
+        ),
+        "{e:?}"
+    );
+    // A floor at θ = 0 changed: the replay may still close every corner face, but the
+    // partition is wrong: either the replay or `validate` (the cross-section) refuses it.
+    for &i in &zero {
+        let e = decode_edited_as(false, &s, &c, |_, cy| {
+            cy[i].floor = match cy[i].floor {
+                None => Some(ObjectId(0)),
+                Some(_) => None,
+            }
+        });
+        assert!(
+            matches!(
+                e,
+                FormatError::Element {
+                    problem: Problem::Replay(_),
+                    ..
+                } | FormatError::Complex { .. }
+            ),
+            "cylinder {i}: {e:?}"
+        );
+    }
+}
+
 #[test]
 fn bad_scene_values_are_named() {
     let (_, _, bytes) = small_file();
@@ -931,6 +1195,7 @@ fn decoded_slices_walk_like_the_owned_complex() {
     );
     let mut objects = vec![SceneObject::BLANK; n];
     let mut points = vec![Point::default(); nv];
+    let mut open = vec![[None; 2]; Scratch::open_len(n)];
     let mut vertices = vec![BLANK_VERTEX; v];
     let mut cylinders = vec![BLANK_CYLINDER; nc];
     let d = decode_into::<128, 32>(
@@ -938,6 +1203,7 @@ fn decoded_slices_walk_like_the_owned_complex() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut open,
         },
         &mut vertices,
         &mut cylinders,
@@ -986,6 +1252,7 @@ fn with_history(s: &Scene, seed: u64) -> (History, Complex, Vec<u8>) {
     let options = EncodeOptions {
         seed: Some(seed),
         compacted: false,
+        explicit_cylinders: false,
     };
     let bytes = encode(&sr, &c, Some(&h), &options).unwrap();
     (h, c, bytes)
@@ -1112,11 +1379,13 @@ fn decode_into_skips_the_history() {
         &EncodeOptions {
             seed: Some(7),
             compacted: true,
+            explicit_cylinders: true,
         },
     )
     .unwrap();
     assert!(bytes.len() > plain.len());
-    // Scene and complex parts are the same bytes with or without the history.
+    // Scene and complex parts are the same bytes with or without the history (both store
+    // every cylinder: version 1).
     let h = Header::read(&bytes).unwrap();
     let end = h.part_range(format::Part::Complex).end;
     assert_eq!(
@@ -1132,6 +1401,7 @@ fn decode_into_skips_the_history() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut [],
         },
         &mut vertices,
         &mut cylinders,
@@ -1149,6 +1419,7 @@ fn decode_into_skips_the_history() {
         Scratch {
             objects: &mut objects,
             points: &mut points,
+            open: &mut [],
         },
         &mut vertices,
         &mut cylinders,

@@ -253,6 +253,7 @@ fn generate_vcx() -> Vec<u8> {
     let options = EncodeOptions {
         seed: Some(0),
         compacted: true,
+        explicit_cylinders: false,
     };
     vcx::format::encode(&s, &complex, None, &options).expect("encode")
 }

@@ -11,7 +11,9 @@ use crate::geom::point::MAX_ABS_RAW;
 use crate::geom::sos::Angle;
 use crate::geom::Point;
 use crate::line_space::{tangency, Bitangent, Bound, Chain};
-use crate::partition::{Cylinder, CylinderId, Region, Vertex, VertexId, Wall};
+use crate::partition::{
+    open_slots, replay, Cylinder, CylinderId, Region, ReplayError, Slots, Vertex, VertexId, Wall,
+};
 use crate::scene::{Eta, FixedScene, Material, ObjectId, SceneRef};
 
 /// One object of the scene part as stored: material and vertex count.
@@ -44,25 +46,26 @@ pub const BLANK_VERTEX: Vertex = Vertex {
 };
 
 /// A placeholder cylinder to fill caller storage with before decoding.
-pub const BLANK_CYLINDER: Cylinder = Cylinder {
-    floor: None,
-    ceiling: None,
-    bottom: None,
-    top: None,
-    left: Wall::Zero,
-    right: Wall::Zero,
-    left_neighbour: None,
-    right_neighbour: None,
-};
+pub const BLANK_CYLINDER: Cylinder = crate::partition::BLANK_CYLINDER;
 
-/// Scratch storage for the scene part, sized from the header (`objects`,
-/// `scene_vertices`): needed only while decoding, reusable after.
+/// Scratch storage, sized from the header (`objects`, `scene_vertices`): needed only
+/// while decoding, reusable after.
 #[derive(Debug)]
 pub struct Scratch<'a> {
     /// At least `header.objects` entries.
     pub objects: &'a mut [SceneObject],
     /// At least `header.scene_vertices` entries.
     pub points: &'a mut [Point],
+    /// The open cylinders while a version-3 file's cylinders are replayed: at least
+    /// [`Scratch::open_len`]`(header.objects)` entries (may be empty for versions 1 and 2).
+    pub open: &'a mut [Slots],
+}
+
+impl Scratch<'_> {
+    /// Entries of [`Scratch::open`] a version-3 file of `objects` objects needs.
+    pub const fn open_len(objects: usize) -> usize {
+        open_slots(objects)
+    }
 }
 
 /// A file decoded into caller storage without allocation: the validated scene and the
@@ -394,6 +397,23 @@ fn read_vertices(
     Ok(())
 }
 
+/// An object id as read (in range).
+fn object(id: Option<usize>) -> Option<ObjectId> {
+    id.map(|o| ObjectId(o as u32))
+}
+
+/// A chain id as read (in range): `2·object + (0 lower, 1 upper)`.
+fn chain(id: Option<usize>) -> Option<Chain> {
+    id.map(|c| Chain {
+        object: ObjectId((c / 2) as u32),
+        bound: if c % 2 == 0 {
+            Bound::Lower
+        } else {
+            Bound::Upper
+        },
+    })
+}
+
 /// Reads `cylinders.len()` cylinders of `arena` (the complex's, or the history's nodes):
 /// eight optional ids each, checked as read against `objects` (floor, ceiling), `2·objects`
 /// (chains), `walls` (vertices of the same part) and the arena's own length (neighbours).
@@ -405,17 +425,6 @@ fn read_cylinders(
     cylinders: &mut [Cylinder],
 ) -> Result<(), FormatError> {
     let (n, nv, nc) = (objects, walls, cylinders.len());
-    let object = |id: Option<usize>| id.map(|o| ObjectId(o as u32));
-    let chain = |id: Option<usize>| {
-        id.map(|c| Chain {
-            object: ObjectId((c / 2) as u32),
-            bound: if c % 2 == 0 {
-                Bound::Lower
-            } else {
-                Bound::Upper
-            },
-        })
-    };
     let wall = |id: Option<usize>| match id {
         None => Wall::Zero,
         Some(v) => Wall::Vertex(VertexId::from_index(v).unwrap_or(VertexId::ZERO)),
@@ -482,14 +491,17 @@ fn read_region(r: &mut Reader<'_>) -> Result<Region, FormatError> {
 /// Decodes the complex part into `vertices[..V]` and `cylinders[..C]` and checks every id
 /// and link: tangent vertices in range, on two objects, tangent there; vertices strictly
 /// sorted by θ; cylinder objects, chains, walls and neighbours in range; walls in θ order;
-/// neighbours symmetric with the same floor, ceiling and shared wall. Returns the region
-/// of a version-2 file.
+/// neighbours symmetric with the same floor, ceiling and shared wall. A version-3 file
+/// stores only the cylinders at θ = 0 (four ids each): the others are replayed from the
+/// vertices (`open` holds the open cylinders meanwhile), and a vertex whose cylinders are
+/// not open is named. Returns the region of a version-2 file.
 fn decode_complex(
     bytes: &[u8],
     h: &Header,
     scene: &SceneRef<'_>,
     vertices: &mut [Vertex],
     cylinders: &mut [Cylinder],
+    open: &mut [Slots],
 ) -> Result<Option<Region>, FormatError> {
     let nv = capacity(Arena::Vertex, h.complex_vertices, vertices.len())?;
     let nc = capacity(Arena::Cylinder, h.cylinders, cylinders.len())?;
@@ -504,10 +516,90 @@ fn decode_complex(
     };
     let start = r.pos;
     read_vertices(&mut r, Arena::Vertex, scene, vertices, true)?;
-    read_cylinders(&mut r, Arena::Cylinder, scene.len(), nv, cylinders)?;
+    if !h.replays_cylinders() {
+        read_cylinders(&mut r, Arena::Cylinder, scene.len(), nv, cylinders)?;
+        r.finish(Part::Complex)?;
+        check_links(bytes, start, nv, cylinders)?;
+        return Ok(region);
+    }
+    let initial = h.stored_cylinders() as usize;
+    capacity(Arena::OpenSlot, open_slots(scene.len()) as u32, open.len())?;
+    read_initial(
+        &mut r,
+        scene.len(),
+        cylinders.get_mut(..initial).unwrap_or_default(),
+    )?;
     r.finish(Part::Complex)?;
-    check_links(bytes, start, nv, cylinders)?;
+    replay(scene.len(), vertices, initial, cylinders, open).map_err(|e| {
+        // Name the stored element at fault: the cylinder at θ = 0, or the vertex that
+        // opened (or failed to close) the cylinder.
+        let stored = |i: usize| i < initial;
+        let (arena, index, why) = match e {
+            ReplayError::Lost(v) => (
+                Arena::Vertex,
+                v,
+                "a corner face it closes has no open cylinder",
+            ),
+            ReplayError::Crowded(i) if stored(i) => (
+                Arena::Cylinder,
+                i,
+                "a third cylinder at θ = 0 on its bottom or top chain",
+            ),
+            ReplayError::Crowded(i) => (
+                Arena::Vertex,
+                (i - initial) / 3,
+                "it opens a third cylinder on one chain",
+            ),
+            ReplayError::Unmatched(i) if stored(i) => (
+                Arena::Cylinder,
+                i,
+                "not continued by exactly one cylinder open at θ = 2π",
+            ),
+            ReplayError::Unmatched(i) => (
+                Arena::Vertex,
+                (i - initial) / 3,
+                "a cylinder it opens continues into no cylinder at θ = 0",
+            ),
+            ReplayError::Storage => (Arena::Cylinder, 0, "storage too small"),
+        };
+        let skip = match arena {
+            Arena::Vertex => 2 * index,
+            _ => 2 * nv + 4 * index,
+        };
+        FormatError::Element {
+            arena,
+            index,
+            field: if arena == Arena::Vertex {
+                "first"
+            } else {
+                "floor"
+            },
+            offset: varint_offset(bytes, start, skip),
+            problem: Problem::Replay(why),
+        }
+    })?;
     Ok(region)
+}
+
+/// Reads the cylinders at θ = 0 of a version-3 file: floor, ceiling, bottom and top, each
+/// checked as read like a whole cylinder's (the replay sets the rest).
+fn read_initial(
+    r: &mut Reader<'_>,
+    objects: usize,
+    cylinders: &mut [Cylinder],
+) -> Result<(), FormatError> {
+    let a = Arena::Cylinder;
+    let n = objects;
+    for (i, slot) in cylinders.iter_mut().enumerate() {
+        *slot = Cylinder {
+            floor: object(r.opt_id(a, i, "floor", n)?),
+            ceiling: object(r.opt_id(a, i, "ceiling", n)?),
+            bottom: chain(r.opt_id(a, i, "bottom", 2 * n)?),
+            top: chain(r.opt_id(a, i, "top", 2 * n)?),
+            ..BLANK_CYLINDER
+        };
+    }
+    Ok(())
 }
 
 /// Decodes the history part (`docs/format.md`, "History part") into the arenas of
@@ -714,7 +806,14 @@ pub fn decode_into<'a, const V: usize, const O: usize>(
         offset: super::HEADER_LEN,
         error,
     })?;
-    let region = decode_complex(bytes, &header, &scene.as_ref(), vertices, cylinders)?;
+    let region = decode_complex(
+        bytes,
+        &header,
+        &scene.as_ref(),
+        vertices,
+        cylinders,
+        scratch.open,
+    )?;
     let (kv, kc) = (header.complex_vertices as usize, header.cylinders as usize);
     Ok(Decoded {
         header,
@@ -765,7 +864,20 @@ pub fn decode(bytes: &[u8]) -> Result<Loaded, FormatError> {
     let mut vertices = vec![BLANK_VERTEX; header.complex_vertices as usize];
     let mut cylinders = vec![BLANK_CYLINDER; header.cylinders as usize];
     let scene_ref = scene.as_ref();
-    let region = decode_complex(bytes, &header, &scene_ref, &mut vertices, &mut cylinders)?;
+    let mut open = if header.replays_cylinders() {
+        vec![[None; 2]; open_slots(scene_ref.len())]
+    } else {
+        vec![]
+    };
+    let region = decode_complex(
+        bytes,
+        &header,
+        &scene_ref,
+        &mut vertices,
+        &mut cylinders,
+        &mut open,
+    )?;
+    drop(open);
     // A region file is checked with what a pruned complex still satisfies
     // (`Complex::validate`).
     let complex =

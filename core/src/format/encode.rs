@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::{
     crc32, FormatError, Header, CHECKSUM_LEN, HEADER_LEN, PART_COMPLEX, PART_HISTORY, PART_SCENE,
-    VERSION, VERSION_REGION,
+    VERSION, VERSION_REGION, VERSION_REPLAY,
 };
 use crate::line_space::Bound;
 use crate::partition::Region;
@@ -22,6 +22,10 @@ pub struct EncodeOptions {
     /// whenever a history is written, whatever this says: the construction links a
     /// destroyed cylinder straight to its replacements.
     pub compacted: bool,
+    /// Store every cylinder (version 1) even where version 3 would store only those at
+    /// θ = 0 and let the reader replay the rest: for readers of versions 1 and 2 only.
+    /// (Files with a history or a region store every cylinder anyway.)
+    pub explicit_cylinders: bool,
 }
 
 /// The arenas of a history to write, borrowed (the fields of
@@ -139,10 +143,12 @@ fn scene_part(w: &mut Writer<'_>, scene: &SceneRef<'_>) -> Result<(), FormatErro
 }
 
 /// The complex part: the region (version 2, if pruned), vertices (their two tangent
-/// vertices), then cylinders.
+/// vertices), then every cylinder or (version 3, `replay`) the cylinders at θ = 0 only,
+/// four ids each, in the order they have in `cylinders`.
 fn complex_part(
     w: &mut Writer<'_>,
     region: Option<&Region>,
+    replay: bool,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
 ) -> Result<(), FormatError> {
@@ -152,7 +158,16 @@ fn complex_part(
         }
     }
     put_vertices(w, vertices)?;
-    put_cylinders(w, cylinders)
+    if !replay {
+        return put_cylinders(w, cylinders);
+    }
+    for c in cylinders.iter().filter(|c| c.left == Wall::Zero) {
+        w.put(&opt(c.floor.map(|o| o.0 as usize))?)?;
+        w.put(&opt(c.ceiling.map(|o| o.0 as usize))?)?;
+        w.put(&chain(c.bottom)?)?;
+        w.put(&chain(c.top)?)?;
+    }
+    Ok(())
 }
 
 /// Vertices: their two tangent vertices (the complex's and the history's alike).
@@ -237,8 +252,31 @@ fn header(
     let mut w = Writer { out: None, pos: 0 };
     scene_part(&mut w, scene)?;
     let scene_bytes = id(w.pos)?;
+    // Files with a region or a history store every cylinder (a region keeps only some,
+    // and the history names the cylinders as its construction numbered them).
+    let version = if region.is_some() {
+        VERSION_REGION
+    } else if history.is_some() || options.explicit_cylinders {
+        VERSION
+    } else {
+        VERSION_REPLAY
+    };
+    if version == VERSION_REPLAY {
+        let at_zero = cylinders.iter().filter(|c| c.left == Wall::Zero).count();
+        if at_zero != 3 * scene.len() + 1 {
+            return Err(FormatError::NotEncodable(
+                "the complex does not have 3n + 1 cylinders at θ = 0",
+            ));
+        }
+    }
     let mut w = Writer { out: None, pos: 0 };
-    complex_part(&mut w, region, vertices, cylinders)?;
+    complex_part(
+        &mut w,
+        region,
+        version == VERSION_REPLAY,
+        vertices,
+        cylinders,
+    )?;
     let complex_bytes = id(w.pos)?;
     let (mut parts, mut history_bytes, mut history_links) = (PART_SCENE | PART_COMPLEX, 0, 0);
     if let Some(h) = history {
@@ -258,12 +296,7 @@ fn header(
         parts |= PART_HISTORY;
     }
     Ok(Header {
-        // Files without a region stay version 1, byte for byte.
-        version: if region.is_some() {
-            VERSION_REGION
-        } else {
-            VERSION
-        },
+        version,
         region: region.is_some(),
         parts,
         seed: options.seed,
@@ -293,8 +326,11 @@ pub fn encoded_len(
 
 /// Writes the file for a scene and its complex (`complex.vertices()`,
 /// `complex.cylinders()`) into `out`, without history; returns the number of bytes
-/// written. No allocation: usable on a device. The complex is trusted (it comes from a
-/// construction or a validated load); readers check everything anyway.
+/// written: version 3 (only the cylinders at θ = 0, in their order in `cylinders`; a
+/// reader numbers the others as the sweep does), or version 1 with
+/// [`EncodeOptions::explicit_cylinders`]. No allocation: usable on a device. The complex
+/// is trusted (it comes from a construction or a validated load); readers check
+/// everything anyway.
 pub fn encode_into(
     scene: &SceneRef<'_>,
     vertices: &[Vertex],
@@ -329,7 +365,7 @@ fn write_file(
         pos: 0,
     };
     scene_part(&mut w, scene)?;
-    complex_part(&mut w, region, vertices, cylinders)?;
+    complex_part(&mut w, region, h.replays_cylinders(), vertices, cylinders)?;
     if let Some(hv) = history {
         history_part(&mut w, hv)?;
     }
@@ -345,9 +381,11 @@ fn write_file(
 /// construction that built it, in a new vector. With a history, the complex must be its
 /// live partition as [`History::complex`](crate::partition::History::complex) numbers it
 /// (build both by the randomized construction), and the history must have inserted every
-/// object; the header's compacted flag is set. A complex pruned to a region
+/// object; the header's compacted flag is set, and the file is version 1 (every cylinder
+/// stored). A complex pruned to a region
 /// ([`Complex::region`](crate::partition::Complex::region)) is written as version 2 with its
-/// region, and without history.
+/// region, and without history. Any other complex is written as version 3 (only the
+/// cylinders at θ = 0 stored) unless [`EncodeOptions::explicit_cylinders`].
 #[cfg(feature = "alloc")]
 pub fn encode(
     scene: &SceneRef<'_>,

@@ -50,6 +50,9 @@ pub enum Arena {
     Link,
     /// Insertions of the randomized construction (object, first node).
     Insertion,
+    /// Scratch slots for the open cylinders while a version-3 file's cylinders are
+    /// replayed (`decode_into`'s `Scratch::open`).
+    OpenSlot,
 }
 
 impl Arena {
@@ -65,6 +68,7 @@ impl Arena {
             Arena::Node => "history part: node",
             Arena::Link => "history part: link",
             Arena::Insertion => "history part: insertion",
+            Arena::OpenSlot => "open-cylinder slot",
         }
     }
 }
@@ -106,6 +110,8 @@ pub enum Problem {
     NeighbourMismatch,
     /// The right wall does not come after the left wall in θ.
     WallOrder,
+    /// The cylinders of a version-3 file do not replay from its vertices (the reason).
+    Replay(&'static str),
 }
 
 impl core::fmt::Display for Problem {
@@ -127,6 +133,7 @@ impl core::fmt::Display for Problem {
                 write!(f, "the neighbour differs in floor, ceiling or wall")
             }
             Problem::WallOrder => write!(f, "the right wall is not after the left wall"),
+            Problem::Replay(why) => write!(f, "the cylinders do not replay: {why}"),
         }
     }
 }

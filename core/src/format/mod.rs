@@ -7,6 +7,8 @@
 //!               parts bitset, counts, seed, byte length of each part
 //! 56   scene    objects (material, vertex count), then vertices as written   (postcard)
 //! ..   complex  vertices (two tangent vertices), then cylinders (8 ids each)  (postcard)
+//!               or, version 3, only the 3n + 1 cylinders at θ = 0 (4 ids each): the
+//!               reader replays the rest from the vertices (`partition::replay`)
 //! ..   history  optional: vertex count, then history vertices, nodes (cylinders), child
 //!               counts, links, insertions (object, first node)          (postcard)
 //! end-4         CRC-32/IEEE of every byte before it, little endian
@@ -18,8 +20,8 @@
 //! The arenas are then decoded element by element, field by field, with
 //! `postcard::take_from_bytes`, each id checked against its arena as it is read; links
 //! between elements (neighbours, θ order of the vertices, tangency of every bitangent) are
-//! checked after; derived state (the adjacency across chains, vertex angles) is rebuilt,
-//! never read. Every failure is a [`FormatError`] naming the part, element, field and byte
+//! checked after; derived state (the adjacency across chains, vertex angles, and in
+//! version 3 all cylinders but those at θ = 0) is rebuilt, never read. Every failure is a [`FormatError`] naming the part, element, field and byte
 //! offset.
 //!
 //! Storage: [`decode_into`] fills caller-provided slices sized from the header (no heap;
@@ -56,6 +58,11 @@ pub const VERSION: u16 = 1;
 /// plus flag bit 2 and the region at the start of the complex part. Written only for such
 /// complexes, so every other file stays version 1, readable by version-1 readers.
 pub const VERSION_REGION: u16 = 2;
+/// The format version of a whole complex written without history (the default of
+/// [`encode`] and [`encode_into`]): version 1 with only the cylinders at θ = 0 stored
+/// (floor, ceiling, bottom, top); the reader replays the others from the vertices
+/// (`partition::replay`, the rotational sweep's event loop). Never has a history part.
+pub const VERSION_REPLAY: u16 = 3;
 /// Bytes of the fixed-size header.
 pub const HEADER_LEN: usize = 56;
 /// Bytes of the checksum at the end.
@@ -81,6 +88,8 @@ pub const PART_COMPLEX: u32 = 1 << 1;
 pub const PART_HISTORY: u32 = 1 << 2;
 /// Every part bit version 1 defines.
 pub const KNOWN_PARTS: u32 = PART_SCENE | PART_COMPLEX | PART_HISTORY;
+/// Every part bit version 3 defines (no history).
+pub const KNOWN_PARTS_V3: u32 = PART_SCENE | PART_COMPLEX;
 
 /// Smallest encoding of one element of each arena, in bytes: a count larger than its
 /// part's length divided by this is rejected before anything is reserved.
@@ -91,6 +100,8 @@ pub const MIN_POINT_BYTES: u64 = 2;
 pub const MIN_VERTEX_BYTES: u64 = 2;
 /// See [`MIN_OBJECT_BYTES`]: eight ids.
 pub const MIN_CYLINDER_BYTES: u64 = 8;
+/// See [`MIN_OBJECT_BYTES`]: a cylinder at θ = 0 of version 3 is four ids.
+pub const MIN_INITIAL_CYLINDER_BYTES: u64 = 4;
 /// See [`MIN_OBJECT_BYTES`]: a history node is a cylinder and its child count.
 pub const MIN_NODE_BYTES: u64 = MIN_CYLINDER_BYTES + 1;
 /// See [`MIN_OBJECT_BYTES`]: a link is one node id.
@@ -137,7 +148,8 @@ pub mod offset {
 /// The header of a file: counts and options, read and checked before any arena.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Header {
-    /// Format version ([`VERSION`], or [`VERSION_REGION`] for a pruned complex).
+    /// Format version ([`VERSION`], [`VERSION_REGION`] for a pruned complex,
+    /// [`VERSION_REPLAY`] for replayed cylinders).
     pub version: u16,
     /// Parts bitset ([`PART_SCENE`], [`PART_COMPLEX`], [`PART_HISTORY`]).
     pub parts: u32,
@@ -222,20 +234,20 @@ impl Header {
             return Err(too_short(offset::FLAGS));
         }
         let version = le_u16(bytes, offset::VERSION);
-        if version != VERSION && version != VERSION_REGION {
+        if !(VERSION..=VERSION_REPLAY).contains(&version) {
             return Err(FormatError::UnsupportedVersion {
                 found: version,
-                supported: VERSION_REGION,
+                supported: VERSION_REPLAY,
             });
         }
         if bytes.len() < HEADER_LEN + CHECKSUM_LEN {
             return Err(too_short(HEADER_LEN + CHECKSUM_LEN));
         }
         let flags = le_u16(bytes, offset::FLAGS);
-        let known = if version == VERSION {
-            KNOWN_FLAGS
-        } else {
+        let known = if version == VERSION_REGION {
             KNOWN_FLAGS_V2
+        } else {
+            KNOWN_FLAGS
         };
         if flags & !known != 0 {
             return Err(FormatError::UnknownFlags {
@@ -246,9 +258,14 @@ impl Header {
             return Err(FormatError::RegionFlagMissing);
         }
         let parts = le_u32(bytes, offset::PARTS);
-        if parts & !KNOWN_PARTS != 0 {
+        let known = if version == VERSION_REPLAY {
+            KNOWN_PARTS_V3
+        } else {
+            KNOWN_PARTS
+        };
+        if parts & !known != 0 {
             return Err(FormatError::UnknownParts {
-                bits: parts & !KNOWN_PARTS,
+                bits: parts & !known,
             });
         }
         for (bit, part) in [(PART_SCENE, Part::Scene), (PART_COMPLEX, Part::Complex)] {
@@ -283,6 +300,22 @@ impl Header {
         }
         h.check_counts()?;
         Ok(h)
+    }
+
+    /// Whether only the cylinders at θ = 0 are stored and the others are replayed from
+    /// the vertices (version 3).
+    pub fn replays_cylinders(&self) -> bool {
+        self.version == VERSION_REPLAY
+    }
+
+    /// Cylinders stored in the complex part: all, or (version 3) the `3·objects + 1` at
+    /// θ = 0.
+    pub fn stored_cylinders(&self) -> u32 {
+        if self.replays_cylinders() {
+            self.objects.saturating_mul(3).saturating_add(1)
+        } else {
+            self.cylinders
+        }
     }
 
     /// Whether the file has a history part.
@@ -390,11 +423,16 @@ impl Header {
             vertices_min,
             self.complex_bytes,
         )?;
+        let cylinders_min = if self.replays_cylinders() {
+            (3 * n + 1) * MIN_INITIAL_CYLINDER_BYTES
+        } else {
+            c * MIN_CYLINDER_BYTES
+        };
         fits(
             "cylinders",
             offset::CYLINDERS,
             c,
-            vertices_min + c * MIN_CYLINDER_BYTES,
+            vertices_min + cylinders_min,
             self.complex_bytes,
         )?;
         if self.has_history() {

@@ -33,6 +33,8 @@
 mod borders;
 mod locate;
 pub mod region;
+#[cfg(any(feature = "alloc", feature = "format"))]
+mod replay;
 #[cfg(feature = "alloc")]
 mod ric;
 #[cfg(feature = "alloc")]
@@ -47,6 +49,10 @@ pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer,
 pub(crate) use locate::point_in_object;
 pub use locate::{point_in_scene, Location};
 pub use region::{Region, RegionError};
+#[cfg(any(feature = "alloc", feature = "format"))]
+pub use replay::{open_slots, Slots};
+#[cfg(feature = "format")]
+pub(crate) use replay::{replay, ReplayError, BLANK as BLANK_CYLINDER};
 #[cfg(feature = "alloc")]
 pub use ric::{Budget, BuildOptions, History, HistoryParts, HistoryStats};
 #[cfg(feature = "alloc")]

@@ -110,6 +110,11 @@ pub struct Args {
     /// scene units; all-opaque scenes only; no history).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
     pub region: Option<String>,
+    /// With `-o`: store every cylinder (format version 1), for readers that predate
+    /// version 3; by default a file without history or region stores only the cylinders at
+    /// θ = 0 and the reader replays the rest from the vertices (version 3).
+    #[arg(long)]
+    pub explicit_cylinders: bool,
 }
 
 /// Parses `X0,Y0,X1,Y1` (scene units, rounded to the grid) into a box; `what` names the
@@ -307,24 +312,33 @@ fn write_vcx(
     with_history: bool,
     args: &Args,
 ) -> Result<(usize, Option<usize>), Failure> {
-    let bytes = encode_vcx(&args.scene, scene, built, with_history, args.seed)?;
+    let bytes = encode_vcx(
+        &args.scene,
+        scene,
+        built,
+        with_history,
+        args.seed,
+        args.explicit_cylinders,
+    )?;
     std::fs::write(out, &bytes)
         .map_err(|e| Failure::bad_input(format!("cannot write {}: {e}", out.display())))?;
     Ok((bytes.len(), history_part_bytes(&bytes)))
 }
 
-/// The bytes `vcx build PATH -o FILE` writes (`seed`: of the randomized construction);
-/// also measured by `vcx bench figures`.
+/// The bytes `vcx build PATH -o FILE` writes (`seed`: of the randomized construction;
+/// `explicit`: `--explicit-cylinders`); also measured by `vcx bench figures`.
 pub(crate) fn encode_vcx(
     path: &Path,
     scene: &SceneRef<'_>,
     built: &Built,
     with_history: bool,
     seed: u64,
+    explicit: bool,
 ) -> Result<Vec<u8>, Failure> {
     let options = vcx::format::EncodeOptions {
         seed: built.history.is_some().then_some(seed),
         compacted: built.history.is_some(),
+        explicit_cylinders: explicit,
     };
     let history = built.history.as_ref().filter(|_| with_history);
     vcx::format::encode(scene, &built.complex, history, &options).map_err(|e| Failure {

@@ -8,13 +8,16 @@
 //! Text output, one line per part:
 //!
 //! ```text
-//! FILE: vcx complex format version 1, 3,214 bytes, seed 0, history compacted: no
-//!   header      56 bytes
-//!   scene      402 bytes  64 objects, 192 vertices
-//!   complex  2,752 bytes  450 vertices (225 free bitangents), 1,543 cylinders (1.78 bytes per cylinder)
+//! FILE: vcx complex format version 3, 1,879 bytes, seed 0, history compacted: yes
+//!   header          56 bytes
+//!   scene          595 bytes  16 objects, 81 vertices
+//!   complex      1,224 bytes  514 vertices (257 free bitangents), 1,591 cylinders, 49 stored (0.77 bytes per cylinder)
 //!   history  absent
-//!   checksum     4 bytes  CRC-32 0x1a2b3c4d
+//!   checksum         4 bytes  CRC-32 0xd1d3a00d
 //! ```
+//!
+//! `N stored`: a version-3 file stores only the `3n + 1` cylinders at θ = 0 and the reader
+//! replays the others from the vertices; versions 1 and 2 store every cylinder.
 //!
 //! With a history (`vcx build --history always`) its line reads `history  B bytes  N nodes,
 //! L links, depth D (b bytes per node)`, the depth being the longest root-to-leaf path of
@@ -24,9 +27,10 @@
 //! `region   viewpoints in X0,Y0,X1,Y1 only (a pruned complex)` after the first.
 //!
 //! With `--json` one object: `file`, `version`, `bytes`, `seed` (or null), `compacted`,
-//! `region` (`[x0, y0, x1, y1]`, or null), `parts` — `header`, `scene`, `complex`, `history` (null when absent; else `bytes`,
-//! `nodes`, `links`, `depth`), `checksum` — each with its `bytes` and its counts, and
-//! `checksum_value` as a hex string.
+//! `region` (`[x0, y0, x1, y1]`, or null), `parts` — `header`, `scene`, `complex` (with
+//! `vertices`, `cylinders` and `stored_cylinders`), `history` (null when absent; else
+//! `bytes`, `nodes`, `links`, `depth`), `checksum` — each with its `bytes` and its counts,
+//! and `checksum_value` as a hex string.
 
 use std::path::PathBuf;
 
@@ -126,6 +130,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
                     "bytes": h.complex_bytes,
                     "vertices": h.complex_vertices,
                     "cylinders": h.cylinders,
+                    "stored_cylinders": h.stored_cylinders(),
                 },
                 "history": if h.has_history() {
                     json!({
@@ -173,11 +178,12 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             grouped(h.scene_vertices.into()),
         ));
         t.push_str(&format!(
-            "  complex  {:>9} bytes  {} vertices ({} free bitangents), {} cylinders ({per_cylinder:.2} bytes per cylinder)\n",
+            "  complex  {:>9} bytes  {} vertices ({} free bitangents), {} cylinders, {} stored ({per_cylinder:.2} bytes per cylinder)\n",
             range(Part::Complex),
             grouped(h.complex_vertices.into()),
             grouped((h.complex_vertices / 2).into()),
             grouped(h.cylinders.into()),
+            grouped(h.stored_cylinders().into()),
         ));
         if h.has_history() {
             let per_node = f64::from(h.history_bytes) / f64::from(h.history_nodes.max(1));

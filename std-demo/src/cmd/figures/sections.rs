@@ -29,10 +29,13 @@ fn json_input(kind: SceneKind, n: u32) -> Result<Input, Failure> {
 }
 
 /// `vcx build SCENE -o F.vcx` with the default randomized construction (seed 0): the
-/// validated build and the bytes of the file without and with the history part.
+/// validated build and the bytes of the file without the history part (version 3: the
+/// cylinders replayed), with every cylinder (`--explicit-cylinders`, version 1) and with
+/// the history part.
 struct Encoded {
     seconds: f64,
     without: Vec<u8>,
+    explicit: Vec<u8>,
     with: Vec<u8>,
 }
 
@@ -46,9 +49,30 @@ fn encode(input: &Input, name: &str) -> Result<Encoded, Failure> {
     let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
     Ok(Encoded {
         seconds: built.seconds,
-        without: build::encode_vcx(path, &scene, &built, false, BUILD_SEED)?,
-        with: build::encode_vcx(path, &scene, &built, true, BUILD_SEED)?,
+        without: build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?,
+        explicit: build::encode_vcx(path, &scene, &built, false, BUILD_SEED, true)?,
+        with: build::encode_vcx(path, &scene, &built, true, BUILD_SEED, false)?,
     })
+}
+
+/// Bytes of RAM a primary walk of a loaded file needs besides the stack: the arenas
+/// `format::decode_into` fills (vertices and cylinders), the derived state
+/// `Complex::from_slices` rebuilds (without vertex angles), and a view's output buffer —
+/// `size_of` on this machine.
+fn walk_ram(bytes: &[u8]) -> Result<usize, Failure> {
+    use core::mem::{size_of, size_of_val};
+    use vcx::partition::BorderSizes;
+    let loaded = vcx::format::decode(bytes).map_err(|e| internal(e.to_string()))?;
+    let (n, c) = (loaded.scene.as_ref().len(), loaded.complex.cylinders());
+    let v = loaded.complex.vertices();
+    let derived = BorderSizes {
+        angles: 0,
+        ..BorderSizes::exact(n, v.len(), c)
+    };
+    Ok(size_of_val(c)
+        + size_of_val(v)
+        + derived.bytes()
+        + vcx::walk::view_capacity(n) * size_of::<vcx::walk::ViewInterval>())
 }
 
 fn join<T: ToString>(v: &[T]) -> String {
@@ -462,6 +486,9 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             thousands(cylinders),
             thousands(e.without.len()),
             format!("{:.2}", per(e.without.len())),
+            thousands(e.explicit.len()),
+            format!("{:.2}", per(e.explicit.len())),
+            thousands(walk_ram(&e.without)?),
             thousands(hist),
             thousands(nodes),
             thousands(h1.history_links as usize),
@@ -488,10 +515,22 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
     let what = "grid n = 256, file without history (Device format sizes)".to_string();
     let target = "≤ 256 KiB (262,144 bytes)".to_string();
     let mut notes = format!(
-        "Bytes per cylinder grow with n because ids grow: a varint takes one more byte past \
-         2⁷, 2¹⁴ and 2²¹ cylinders or vertices. The history part is {} of the file with \
-         history (each node stored as 8 ids plus a child count).",
-        shares.join(", ")
+        "Without history a file stores the vertices (two scene-vertex ids each) and only the \
+         3n + 1 cylinders at θ = 0 (format version 3): the reader replays the other cylinders \
+         from the vertices, three per vertex, by the rotational sweep's event loop without \
+         its geometry (`partition::replay`). `--explicit-cylinders` stores every cylinder \
+         (version 1, 8 ids each), as does every file with a history (the history names \
+         cylinders as its construction numbered them). Bytes per stored cylinder grow with \
+         n because ids grow: a varint takes one more byte past 2⁷, 2¹⁴ and 2²¹ cylinders or \
+         vertices. The history part is {} of the file with history (each node stored as 8 \
+         ids plus a child count). Walk RAM: the bytes a primary walk of the loaded file \
+         needs besides its stack (about 3.5 KiB, ARCHITECTURE.md) — the decoded vertices and \
+         cylinders, the derived state without vertex angles, and a view's output buffer \
+         (`size_of` on this machine; the formula is in ARCHITECTURE.md, \"Storage and walk \
+         RAM\"): the file is small, but a device decodes every cylinder into RAM, {} bytes \
+         each.",
+        shares.join(", "),
+        core::mem::size_of::<vcx::partition::Cylinder>()
     );
     let t = match at_256 {
         Some((b, cylinders)) => {
@@ -530,8 +569,8 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
              columns as `vcx inspect --json` reports them (`parts.history`: bytes, nodes, \
              links, depth of the decoded DAG). Build seconds: the construction alone. Alone: \
              `vcx gen grid N --seed {SEED} -o g.json; vcx build g.json --history never -o \
-             a.vcx; vcx build g.json --history always -o b.vcx; vcx inspect b.vcx --json` for \
-             N = {}.",
+             a.vcx; vcx build g.json --history never --explicit-cylinders -o e.vcx; vcx build \
+             g.json --history always -o b.vcx; vcx inspect b.vcx --json` for N = {}.",
             join(&s.sizes_n),
         ),
         table: Table {
@@ -540,6 +579,9 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 "cylinders",
                 "file without history",
                 "bytes / cylinder",
+                "every cylinder stored",
+                "bytes / cylinder",
+                "walk RAM",
                 "history part",
                 "history nodes",
                 "links",
@@ -592,7 +634,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             ..Default::default()
         };
         let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
-        let full_bytes = build::encode_vcx(path, &scene, &built, false, BUILD_SEED)?;
+        let full_bytes = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?;
         let full = crate::input::from_bytes(path, &full_bytes)?;
         whole.push((f64::from(n), full_bytes.len() as f64));
         let (lo, hi) = scene.vertices().iter().fold(
@@ -632,7 +674,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 history: None,
                 seconds: built.seconds,
             };
-            let bytes = build::encode_vcx(path, &scene, &pruned, false, BUILD_SEED)?;
+            let bytes = build::encode_vcx(path, &scene, &pruned, false, BUILD_SEED, false)?;
             let boxed = crate::input::from_bytes(path, &bytes)?;
             let points = bench::Points::Given(bench::random_points_in(
                 &scene,
