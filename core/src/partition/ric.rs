@@ -44,8 +44,11 @@
 //! **Events.** Between events the chain changes only locally, so after an event it is
 //! rebuilt from the first cylinder that changed and spliced back onto the unchanged rest
 //! ([`History::chain_up`]). The bitangents of N with each object met are computed once
-//! per insertion. The replacement intervals derived from the chain carry the chain indices
-//! they cover, so each chain cylinder is linked to exactly the intervals over it.
+//! per insertion, grouped by the pair of chains they join (an event search reads only the
+//! group that can fit). The replacement intervals derived from the chain carry the chain
+//! indices they cover, so each chain cylinder is linked to exactly the intervals over it.
+//! The order of N and an arc's object along the lines (one offset comparison per vertex
+//! of N) is asked only where the layer depends on it.
 //!
 //! **Scratch.** The per-insertion state (the chain, the open replacement intervals, the
 //! per-conflict-cylinder pieces, recorded links, the bitangents of N with its neighbours)
@@ -153,6 +156,12 @@ impl Dir {
     }
 }
 
+/// [`Dir::cmp`] when the keys alone decide it (both valid and different), else `None`.
+#[inline(always)]
+fn fast_order(a: &Dir, b: &Dir) -> Option<Ordering> {
+    (a.fast && b.fast && a.key != b.key).then(|| a.key.cmp(&b.key))
+}
+
 /// An angle θ with its fast comparison key.
 #[derive(Clone, Copy, Debug)]
 struct Key {
@@ -196,17 +205,36 @@ impl Shape {
         bottom: Option<Chain>,
         top: Option<Chain>,
     ) -> Shape {
-        let object = |o: Option<ObjectId>| o.map_or(0, |o| (o.0 as u128 & 0xffff_ffff) + 1);
-        let chain = |c: Option<Chain>| {
-            c.map_or(0, |c| {
-                let bound = match c.bound {
-                    Bound::Lower => 0,
-                    Bound::Upper => 1,
-                };
-                1 + 2 * (c.object.0 as u128 & 0x7fff_ffff) + bound
-            })
-        };
-        Shape(object(floor) << 96 | object(ceiling) << 64 | chain(bottom) << 32 | chain(top))
+        Shape::of_fields(
+            Shape::object(floor),
+            Shape::object(ceiling),
+            Shape::chain(bottom),
+            Shape::chain(top),
+        )
+    }
+
+    /// The field of a floor or ceiling (injective: equal fields, equal objects).
+    #[inline]
+    fn object(o: Option<ObjectId>) -> u128 {
+        o.map_or(0, |o| (o.0 as u128 & 0xffff_ffff) + 1)
+    }
+
+    /// The field of a bottom or top arc (injective for object ids below 2³¹).
+    #[inline]
+    fn chain(c: Option<Chain>) -> u128 {
+        c.map_or(0, |c| {
+            let bound = match c.bound {
+                Bound::Lower => 0,
+                Bound::Upper => 1,
+            };
+            1 + 2 * (c.object.0 as u128 & 0x7fff_ffff) + bound
+        })
+    }
+
+    /// The shape of packed fields (as [`Shape::object`] and [`Shape::chain`] make them).
+    #[inline]
+    fn of_fields(floor: u128, ceiling: u128, bottom: u128, top: u128) -> Shape {
+        Shape(floor << 96 | ceiling << 64 | bottom << 32 | top)
     }
 
     fn of(c: &Cylinder) -> Shape {
@@ -708,13 +736,18 @@ impl History {
     /// Whether θ⁺ (just after θ) lies in the cylinder's θ-range.
     #[inline]
     fn spans(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key) -> bool {
-        let right = match c.right {
+        self.right_after(scene, c, theta) && self.left_at_or_before(scene, c.left, theta)
+    }
+
+    /// Whether the cylinder's right wall lies after θ.
+    #[inline]
+    fn right_after(&self, scene: &SceneRef<'_>, c: &Cylinder, theta: &Key) -> bool {
+        match c.right {
             Wall::Zero => true,
             Wall::Vertex(v) => self
                 .cmp_vertex(scene, v, theta)
                 .is_none_or(|o| o == Ordering::Greater),
-        };
-        right && self.left_at_or_before(scene, c.left, theta)
+        }
     }
 
     /// Whether the cylinder's trapezoid contains the line of direction θ⁺ through the
@@ -1031,9 +1064,11 @@ impl History {
             .rev()
             .map(|e| e.id)
             .find(|id| self.alive.get(id.index()).is_some_and(|&a| a))?;
+        // Its left wall is at or before θ (the entry is before `k`, and the entry's test is
+        // `left_at_or_before` on the same wall): only the right wall is left to check.
         self.cylinders
             .get(id.index())
-            .is_some_and(|c| self.spans(scene, c, theta))
+            .is_some_and(|c| self.right_after(scene, c, theta))
             .then_some(id)
     }
 
@@ -1137,7 +1172,7 @@ impl History {
         self.chain_up(scene, s, restart, &zero, None)
             .ok_or(lost("chain at 0"))?;
         core::mem::swap(&mut s.chain, &mut s.next);
-        derive(&self.cylinders, &s.chain, n, &mut s.derived);
+        derive(&self.cylinders, &s.chain, n, &mut s.rows, &mut s.derived);
         for k in 0..s.derived.len() {
             let shape = s.derived[k].0;
             let id = self.push(Cylinder::new(shape, Wall::Zero))?;
@@ -1187,11 +1222,9 @@ impl History {
             let k = s.chain.len();
             let restart = match crossing {
                 Some((b, true, (chain, side))) => {
-                    let layer = layer_across(
-                        chain,
-                        side,
-                        n_after(scene, n, chain.object, &angle.angle, Some(&b)),
-                    );
+                    let layer = layer_across(chain, side, || {
+                        n_after(scene, n, chain.object, &angle.angle, Some(&b), None)
+                    });
                     let i0 = self
                         .across(scene, chain, side, layer, &angle)
                         .ok_or(lost("across at crossing"))?;
@@ -1305,11 +1338,12 @@ impl History {
             if angle.offset_cmp_after(top_n, h) == Sign::Positive {
                 return Some(());
             }
-            let layer = layer_across(
-                top,
-                Side::Above,
-                n_after(scene, n, top.object, angle, event),
-            );
+            // The order of N and the arc's object matters only for a lower arc, whose
+            // tangent vertex `h` is then the first one `n_after` tries.
+            let lower = (top.bound == Bound::Lower).then_some(h);
+            let layer = layer_across(top, Side::Above, || {
+                n_after(scene, n, top.object, angle, event, lower)
+            });
             cur = self.across(scene, top, Side::Above, layer, theta)?;
             if let Some(p) = tail(cur) {
                 out.extend_from_slice(s.chain.get(p..)?);
@@ -1375,11 +1409,18 @@ impl History {
             })
         };
         let mut best: Option<((Dir, Src), Event)> = None;
+        // Most comparisons are decided by the keys alone: that test is inlined, the rest
+        // (ties, parallel vectors) goes through `cmp` and `after`.
+        let less = |c: &(Dir, Src), b: &(Dir, Src)| match fast_order(&c.0, &b.0) {
+            Some(o) => o == Ordering::Less,
+            None => cmp(*c, *b) == Ordering::Less,
+        };
         let better = |c: (Dir, Src), best: &Option<((Dir, Src), Event)>| {
-            after(c)
-                && best
-                    .as_ref()
-                    .is_none_or(|(b, _)| cmp(c, *b) == Ordering::Less)
+            best.as_ref().is_none_or(|(b, _)| less(&c, b))
+                && theta.is_none_or(|t| match fast_order(&c.0, &t.dir) {
+                    Some(o) => o == Ordering::Greater,
+                    None => after(c),
+                })
         };
         let vertex = |v: VertexId| self.dirs.get(v.index()).map(|&d| (d, Src::Vertex(v)));
         for &id in &s.chain {
@@ -1401,20 +1442,12 @@ impl History {
             };
             for (arc, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
                 let Some(arc) = arc else { continue };
-                let range = s.cached(arc.object);
+                // Only bitangents from N's `bound` chain to the arc's chain fit.
+                let range = s.cached(arc.object, fit_index(bound, arc.bound));
                 for i in range {
                     let Some((b, a)) = s.pool.get(i) else { break };
-                    let fits = (b.first_object == s.n
-                        && b.first_bound == bound
-                        && b.second_bound == arc.bound)
-                        || (b.second_object == s.n
-                            && b.second_bound == bound
-                            && b.first_bound == arc.bound);
                     let cand = (a.dir, Src::Pool(i));
-                    if fits
-                        && right.is_none_or(|r| cmp(cand, r) == Ordering::Less)
-                        && better(cand, &best)
-                    {
+                    if right.as_ref().is_none_or(|r| less(&cand, r)) && better(cand, &best) {
                         let event = Event::Cross {
                             bitangent: *b,
                             lower: bound == Bound::Lower,
@@ -1435,12 +1468,13 @@ impl History {
 
     /// Moves the insertion to the chain `s.next` after an event at `wall`.
     fn step(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
-        derive(&self.cylinders, &s.next, s.n, &mut s.derived);
+        derive(&self.cylinders, &s.next, s.n, &mut s.rows, &mut s.derived);
         // The derived intervals by shape (with their index, so each learns its cylinder).
         s.shapes.clear();
         s.shapes
             .extend(s.derived.iter().enumerate().map(|(k, d)| (d.0, k as u32)));
-        s.shapes.sort_unstable();
+        // By shape only: the order of the indices within a shape does not matter.
+        s.shapes.sort_unstable_by_key(|e| e.0);
         s.run_id.clear();
         s.run_id.resize(s.derived.len(), CylinderId::ZERO);
         s.closers.clear();
@@ -1521,7 +1555,8 @@ impl History {
             if old.left == wall {
                 continue; // opens at this very wall: nothing of it lies outside before
             }
-            let piece = match s.state(d).remainder.take() {
+            let di = s.state_index(d);
+            let piece = match s.dense[di].remainder.take() {
                 Some(p) => p, // left earlier, comes back now
                 None => {
                     let p = self.push(Cylinder {
@@ -1529,15 +1564,15 @@ impl History {
                         ..old
                     })?;
                     s.created.push(p);
-                    s.state(d).first_piece = Some(p);
+                    s.dense[di].first_piece = Some(p);
                     s.firsts.push(d);
-                    s.links.push((d, p));
+                    s.links.push((di as u32, p));
                     p
                 }
             };
             self.cylinders[piece.index()].right = wall;
             self.cylinders[piece.index()].right_neighbour = None;
-            s.state(d).last_piece = None;
+            s.dense[di].last_piece = None;
             s.closers.push(piece);
         }
         s.diff.clear();
@@ -1560,11 +1595,12 @@ impl History {
                 ..old
             })?;
             s.created.push(p);
-            let st = s.state(d);
+            let di = s.state_index(d);
+            let st = &mut s.dense[di];
             st.remainder = Some(p);
             st.last_piece = Some(p);
             s.lasts.push(d);
-            s.links.push((d, p));
+            s.links.push((di as u32, p));
             s.openers.push(p);
         }
         // Faces continuing across the wall keep their floor and ceiling.
@@ -1651,22 +1687,26 @@ impl History {
         }
         // The counts after this insertion, against the budget.
         // (Destroyed cylinders' entries stay until their list is compacted: count them.)
-        let mut added = 0usize;
+        // The new border-index entries, (list, entry) in creation order, for
+        // `update_borders` (the created cylinders' arcs and left walls are final).
+        s.pending.clear();
         for &id in &s.created {
-            added += border_slots(&self.cylinders[id.index()])
-                .iter()
-                .flatten()
-                .count();
+            let Some(c) = self.cylinders.get(id.index()) else {
+                continue;
+            };
+            for sl in border_slots(c).into_iter().flatten() {
+                s.pending.push((sl, self.entry(c.left, id)));
+            }
         }
-        let entries = self.entries + added;
+        let entries = self.entries + s.pending.len();
         let live = (self.live + s.created.len()).saturating_sub(s.dense.len());
         // Children: group the recorded links by parent (counting sort over the dense
         // order), sorted by id and without repeats.
         s.count.clear();
         s.count.resize(s.dense.len() + 1, 0);
-        for &(d, _) in &s.links {
-            if let Some(&k) = s.sparse_index(d) {
-                s.count[k as usize + 1] += 1;
+        for &(k, _) in &s.links {
+            if let Some(x) = s.count.get_mut(k as usize + 1) {
+                *x += 1;
             }
         }
         for k in 1..s.count.len() {
@@ -1676,9 +1716,8 @@ impl History {
         s.grouped.resize(s.links.len(), CylinderId::ZERO);
         s.fill.clear();
         s.fill.extend_from_slice(&s.count);
-        for &(d, c) in &s.links {
-            if let Some(&k) = s.sparse_index(d) {
-                let at = &mut s.fill[k as usize];
+        for &(k, c) in &s.links {
+            if let Some(at) = s.fill.get_mut(k as usize) {
                 s.grouped[*at as usize] = c;
                 *at += 1;
             }
@@ -1763,25 +1802,19 @@ impl History {
         }
         // The new entries grouped by list (counting sort, creation order kept within a
         // list), then each list updated once: one pass of moves instead of one per entry.
-        s.pending.clear();
+        // (`s.pending` holds them, from `finish`.)
         s.groups.clear();
         if s.per_slot.len() < self.borders.len() {
             s.per_slot.resize(self.borders.len(), 0);
         }
-        for &id in &s.created {
-            let Some(c) = self.cylinders.get(id.index()).copied() else {
+        for &(sl, _) in &s.pending {
+            let Some(count) = s.per_slot.get_mut(sl) else {
                 continue;
             };
-            for sl in border_slots(&c).into_iter().flatten() {
-                let Some(count) = s.per_slot.get_mut(sl) else {
-                    continue;
-                };
-                if *count == 0 {
-                    s.groups.push((sl, 0, 0));
-                }
-                *count += 1;
-                s.pending.push((sl, self.entry(c.left, id)));
+            if *count == 0 {
+                s.groups.push((sl, 0, 0));
             }
+            *count += 1;
         }
         let mut at = 0;
         for g in &mut s.groups {
@@ -1955,6 +1988,8 @@ struct Scratch {
     spare_open: Vec<(Shape, CylinderId)>,
     /// The replacement intervals of the chain and the chain indices each covers.
     derived: Vec<(Shape, usize, usize)>,
+    /// [`derive`]'s copy of the chain cylinders' fields.
+    rows: Vec<Row>,
     /// `(shape, index in derived)`, sorted.
     shapes: Vec<(Shape, u32)>,
     /// The cylinder of each derived interval.
@@ -1973,8 +2008,8 @@ struct Scratch {
     closers: Vec<CylinderId>,
     openers: Vec<CylinderId>,
     diff: Vec<CylinderId>,
-    /// (destroyed cylinder, child) in the order recorded.
-    links: Vec<(CylinderId, CylinderId)>,
+    /// (destroyed cylinder's index in `dense`, child) in the order recorded.
+    links: Vec<(u32, CylinderId)>,
     firsts: Vec<CylinderId>,
     lasts: Vec<CylinderId>,
     /// Neighbour links to make at commit: (left, right).
@@ -1990,9 +2025,13 @@ struct Scratch {
     stamp: u32,
     /// Counts chain updates (for [`Old::pos`]).
     generation: u32,
-    /// Per object: (insertion number, start, len) of its bitangents with N in `pool`.
-    bt_of: Vec<(u32, u32, u32)>,
+    /// Per object: the insertion number and the bounds in `pool` of its bitangents with N,
+    /// grouped by the pair of chains they join ([`fit_index`]): group `g` is
+    /// `pool[bounds[g] .. bounds[g + 1]]`, in the order [`bitangents`] gives them.
+    bt_of: Vec<(u32, [u32; 5])>,
     pool: Vec<(Bitangent, Key)>,
+    /// The bitangents of N and one object, before grouping into `pool`.
+    found: Vec<(Bitangent, Key)>,
     insertion: u32,
 }
 
@@ -2022,7 +2061,7 @@ impl Scratch {
         }
         self.pool.clear();
         if self.bt_of.len() < objects {
-            self.bt_of.resize(objects, (0, 0, 0));
+            self.bt_of.resize(objects, (0, [0; 5]));
         }
         self.insertion = self.insertion.wrapping_add(1);
         if self.insertion == 0 {
@@ -2062,12 +2101,6 @@ impl Scratch {
             .and_then(|&k| self.dense.get(k as usize))
     }
 
-    /// The state of conflict cylinder `id`, created on first sight.
-    fn state(&mut self, id: CylinderId) -> &mut Old {
-        let k = self.state_index(id);
-        &mut self.dense[k]
-    }
-
     /// The index in `dense` of conflict cylinder `id`, created on first sight.
     fn state_index(&mut self, id: CylinderId) -> usize {
         match self.sparse_index(id) {
@@ -2102,20 +2135,38 @@ impl Scratch {
         if e.0 == self.insertion {
             return;
         }
-        let start = self.pool.len();
+        self.found.clear();
         for b in bitangents(*scene, self.n, other) {
-            self.pool.push((b, Key::new(b.angle(scene))));
+            self.found.push((b, Key::new(b.angle(scene))));
         }
-        let len = self.pool.len() - start;
+        // The chains a bitangent of N joins: N's one first.
+        let fits = |b: &Bitangent, g: usize| {
+            (b.first_object == self.n && fit_index(b.first_bound, b.second_bound) == g)
+                || (b.second_object == self.n && fit_index(b.second_bound, b.first_bound) == g)
+        };
+        let mut bounds = [0u32; 5];
+        bounds[0] = self.pool.len() as u32;
+        for g in 0..4 {
+            for e in &self.found {
+                if fits(&e.0, g) {
+                    self.pool.push(*e);
+                }
+            }
+            bounds[g + 1] = self.pool.len() as u32;
+        }
         if let Some(e) = self.bt_of.get_mut(other.0 as usize) {
-            *e = (self.insertion, start as u32, len as u32);
+            *e = (self.insertion, bounds);
         }
     }
 
-    /// The range in `pool` of the cached bitangents of N and `other`.
-    fn cached(&self, other: ObjectId) -> core::ops::Range<usize> {
+    /// The range in `pool` of the cached bitangents of N and `other` joining the chains of
+    /// group `group` ([`fit_index`]).
+    fn cached(&self, other: ObjectId, group: usize) -> core::ops::Range<usize> {
         match self.bt_of.get(other.0 as usize) {
-            Some(&(i, s, l)) if i == self.insertion => s as usize..s as usize + l as usize,
+            Some((i, b)) if *i == self.insertion => match (b.get(group), b.get(group + 1)) {
+                (Some(&s), Some(&e)) => s as usize..e as usize,
+                _ => 0..0,
+            },
             _ => 0..0,
         }
     }
@@ -2142,18 +2193,33 @@ impl Scratch {
             let Some(&id) = self.run_id.get(r) else {
                 break;
             };
-            for j in lo..=hi {
-                let Some(st) = self.chain_dense.get(j).and_then(|&i| self.dense.get_mut(i)) else {
+            // The chain indices `lo..=hi` (an exclusive range: cheaper to walk).
+            let end = hi.saturating_add(1).min(self.chain_dense.len());
+            for j in lo..end {
+                let Some(&i) = self.chain_dense.get(j) else {
+                    break;
+                };
+                let Some(st) = self.dense.get_mut(i) else {
                     break;
                 };
                 if st.recent.contains(&Some(id)) {
                     continue;
                 }
                 st.recent = [Some(id), st.recent[0]];
-                self.links.push((st.id, id));
+                self.links.push((i as u32, id));
             }
         }
     }
+}
+
+/// The group in [`Scratch::pool`] of the bitangents from N's chain `n` to another
+/// object's chain `other`.
+fn fit_index(n: Bound, other: Bound) -> usize {
+    let k = |b: Bound| match b {
+        Bound::Lower => 0,
+        Bound::Upper => 1,
+    };
+    2 * k(n) + k(other)
 }
 
 /// Where a candidate event's angle comes from.
@@ -2180,15 +2246,16 @@ enum Event {
 }
 
 /// Which layer across `chain` (entering on `side`) holds N's chord: where the chain's
-/// object is crossed on that side, before it if N comes before it along the lines.
-fn layer_across(chain: Chain, side: Side, n_after: bool) -> Layer {
+/// object is crossed on that side, before it if N comes before it along the lines
+/// (`n_after`, asked only then: it costs offset comparisons).
+fn layer_across(chain: Chain, side: Side, n_after: impl FnOnce() -> bool) -> Layer {
     let crossed = match chain.bound {
         Bound::Lower => Side::Above,
         Bound::Upper => Side::Below,
     };
     if side != crossed {
         Layer::Around
-    } else if n_after {
+    } else if n_after() {
         Layer::After
     } else {
         Layer::Before
@@ -2197,13 +2264,14 @@ fn layer_across(chain: Chain, side: Side, n_after: bool) -> Layer {
 
 /// Whether N lies after object `h` along the lines of direction θ⁺ through the tangent
 /// point of `h`'s chain. At a bitangent of N and `h` the line is tangent to both; the
-/// bitangent's order decides.
+/// bitangent's order decides. `lower`: `h`'s lower tangent vertex at θ, if known.
 fn n_after(
     scene: &SceneRef<'_>,
     n: ObjectId,
     h: ObjectId,
     theta: &Angle,
     event: Option<&Bitangent>,
+    lower: Option<RankedPoint>,
 ) -> bool {
     if let Some(b) = event {
         if b.first_object == h && b.second_object == n {
@@ -2214,11 +2282,41 @@ fn n_after(
         }
     }
     // Any vertex of h on the crossing line works; the chain's tangent vertex lies on it.
-    let v = [Bound::Lower, Bound::Upper]
-        .into_iter()
-        .map(|b| ranked(scene, tangent_vertex(scene, h, theta, b)))
-        .find_map(|p| object_ahead_of(scene, n, theta, p));
-    v.unwrap_or(false)
+    let lower =
+        lower.unwrap_or_else(|| ranked(scene, tangent_vertex(scene, h, theta, Bound::Lower)));
+    if let Some(a) = object_ahead(scene, n, theta, lower) {
+        return a;
+    }
+    let upper = ranked(scene, tangent_vertex(scene, h, theta, Bound::Upper));
+    object_ahead(scene, n, theta, upper).unwrap_or(false)
+}
+
+/// [`object_ahead_of`] with each vertex's offset compared once (it compares both ends of
+/// every edge): the same first crossing edge, the same answer.
+fn object_ahead(
+    scene: &SceneRef<'_>,
+    object: ObjectId,
+    theta: &Angle,
+    o: RankedPoint,
+) -> Option<bool> {
+    let obj = scene.object(object)?;
+    let (first, len) = (obj.first_vertex(), obj.len());
+    let v0 = ranked(scene, first);
+    let s0 = theta.offset_cmp(o, v0);
+    let (mut a, mut sa) = (v0, s0);
+    for k in 0..len {
+        let (b, sb) = if k + 1 < len {
+            let b = ranked(scene, first + k + 1);
+            (b, theta.offset_cmp(o, b))
+        } else {
+            (v0, s0)
+        };
+        if sa != sb {
+            return Some(theta.object_ahead_of_vertex(o, a, b) == Sign::Positive);
+        }
+        (a, sa) = (b, sb);
+    }
+    None
 }
 
 /// The replacement intervals of a chain (module documentation), each with the range of
@@ -2228,6 +2326,7 @@ fn derive(
     cylinders: &[Cylinder],
     chain: &[CylinderId],
     n: ObjectId,
+    rows: &mut Vec<Row>,
     out: &mut Vec<(Shape, usize, usize)>,
 ) {
     out.clear();
@@ -2255,30 +2354,47 @@ fn derive(
         k - 1,
         k - 1,
     ));
+    // The floor, ceiling and top of each chain cylinder, read once and packed as shape
+    // fields (up to the first id not in the arena, which ends the runs as if the chain
+    // ended there). Packing is injective, so runs compare packed fields.
+    rows.clear();
+    rows.extend(chain.iter().map_while(get).map(|c| {
+        (
+            Shape::object(c.floor),
+            Shape::object(c.ceiling),
+            Shape::chain(c.top),
+        )
+    }));
+    let complete = rows.len() == k;
+    let (nf, lower, upper) = (
+        Shape::object(Some(n)),
+        Shape::chain(lower),
+        Shape::chain(upper),
+    );
     // Runs of equal floor give (F, N); runs of equal ceiling give (N, G).
     for before in [true, false] {
-        let key = |c: &Cylinder| if before { c.floor } else { c.ceiling };
+        let key = |c: &Row| if before { c.0 } else { c.1 };
         let mut start = lower;
         let mut from = 0;
-        for j in 0..k {
-            let Some(c) = chain.get(j).and_then(get) else {
-                return;
-            };
-            let next = chain.get(j + 1).and_then(get);
+        for (j, c) in rows.iter().enumerate() {
+            let next = rows.get(j + 1);
             if next.is_none_or(|m| key(m) != key(c)) {
-                let end = if next.is_some() { c.top } else { upper };
-                let (f, g) = if before {
-                    (key(c), Some(n))
-                } else {
-                    (Some(n), key(c))
-                };
-                out.push((Shape::new(f, g, start, end), from, j));
-                start = c.top;
+                let end = if next.is_some() { c.2 } else { upper };
+                let (f, g) = if before { (key(c), nf) } else { (nf, key(c)) };
+                out.push((Shape::of_fields(f, g, start, end), from, j));
+                start = c.2;
                 from = j + 1;
             }
         }
+        if !complete {
+            return;
+        }
     }
 }
+
+/// A chain cylinder's floor, ceiling and top arc as packed [`Shape`] fields, as
+/// [`derive`] reads them.
+type Row = (u128, u128, u128);
 
 #[cfg(test)]
 mod tests {
