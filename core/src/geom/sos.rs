@@ -603,6 +603,34 @@ impl KeyedAngle {
         }
         self.angle.cmp_angle(&other.angle)
     }
+
+    /// [`Angle::cmp_angle`]`(&self.angle, other)` with this side's key precomputed (a
+    /// walk compares one event with several walls' angles).
+    #[inline]
+    pub(crate) fn cmp_angle(&self, other: &Angle) -> Ordering {
+        let upper_other = upper(other.head, other.tail);
+        if self.upper != upper_other {
+            return if self.upper {
+                Ordering::Less
+            } else {
+                Ordering::Greater
+            };
+        }
+        #[cfg(not(feature = "naive-f64"))]
+        if let (Some((ux, uy)), Some(vx), Some(vy)) = (
+            self.vector,
+            other.head.x.checked_sub(other.tail.x),
+            other.head.y.checked_sub(other.tail.y),
+        ) {
+            // As in `KeyedAngle::cmp`.
+            match Sign::of_i128(i128::from(ux) * i128::from(vy) - i128::from(uy) * i128::from(vx)) {
+                Sign::Positive => return Ordering::Less,
+                Sign::Negative => return Ordering::Greater,
+                Sign::Zero => {}
+            }
+        }
+        self.angle.cmp_angle(other)
+    }
 }
 
 #[cfg(test)]
@@ -675,12 +703,61 @@ mod tests {
             for b in angles().step_by(3) {
                 let (ka, kb) = (a.keyed(), b.keyed());
                 assert_eq!(ka.cmp(&kb), a.cmp_angle(&b), "{a:?} {b:?}");
+                assert_eq!(ka.cmp_angle(&b), a.cmp_angle(&b), "{a:?} {b:?}");
                 let ((ux, uy), (vx, vy)) = (a.head.minus(a.tail), b.head.minus(b.tail));
                 let general = match Sign::of_i128(ux * vy - uy * vx) {
                     Sign::Zero => first_coefficient(a.head, a.tail, b.head, b.tail),
                     s => s,
                 };
                 assert_eq!(cross(a.head, a.tail, b.head, b.tail), general);
+            }
+        }
+    }
+
+    /// The keyed comparisons at the extremes of the range: query points at ±2⁵² (the
+    /// query grid's bound), vertices at ±(2³⁰ − 1) on the scene grid, with many exact ties.
+    #[test]
+    fn keyed_comparisons_agree_at_the_extremes() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            state >> 11
+        };
+        const Q: i64 = 1 << 52;
+        const V: i32 = (1 << 30) - 1;
+        let mut pick_q = || [-Q, -Q + 1, -1, 0, 1, Q - 1, Q][next() as usize % 7];
+        let qs: [crate::geom::QueryPoint; 12] = core::array::from_fn(|_| {
+            crate::geom::QueryPoint::from_raw(pick_q(), pick_q()).unwrap()
+        });
+        let mut next2 = move || {
+            state = state
+                .wrapping_mul(2862933555777941757)
+                .wrapping_add(3037000493);
+            state >> 13
+        };
+        let c = |k: u64| [-V, -V + 1, -1, 0, 1, V - 1, V][k as usize % 7];
+        let vs: [RankedPoint; 12] = core::array::from_fn(|i| v(c(next2()), c(next2()), i));
+        let mut angles = heapless::Vec::<Angle, 512>::new();
+        for q in &qs {
+            for w in &vs {
+                angles.push(Angle::from_query(*q, *w)).unwrap();
+                angles.push(Angle::from_query(*q, *w).reversed()).unwrap();
+            }
+        }
+        for a in &vs {
+            for b in &vs {
+                angles.push(Angle::of_pair(*a, *b)).unwrap();
+            }
+        }
+        angles.push(Angle::ZERO).unwrap();
+        for a in &angles {
+            let ka = a.keyed();
+            for b in &angles {
+                let expected = a.cmp_angle(b);
+                assert_eq!(ka.cmp_angle(b), expected, "{a:?} {b:?}");
+                assert_eq!(ka.cmp(&b.keyed()), expected, "{a:?} {b:?}");
             }
         }
     }

@@ -256,6 +256,62 @@ impl Wide {
     pub(crate) fn dot(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
         u.0.mul_add(v.0, &u.1, v.1)
     }
+
+    /// `a·b + c·d` for `i128` factors: at most 2²⁵⁵, always within budget; [`Wide::mul_add`]
+    /// of `Wide::from_i128(a)` without its general loops (a mapped range end computes two).
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction")),
+        allow(dead_code)
+    )]
+    pub(crate) fn mul2_i128(a: i128, b: i128, c: i128, d: i128) -> Wide {
+        let (pn, p) = product_i128(a, b);
+        let (qn, q) = product_i128(c, d);
+        let mut mag = [0u64; LIMBS];
+        if pn == qn {
+            let mut carry = 0u128;
+            for (slot, (&x, &y)) in mag.iter_mut().zip(p.iter().zip(&q)) {
+                let s = u128::from(x) + u128::from(y) + carry;
+                *slot = s as u64;
+                carry = s >> 64;
+            }
+            if let Some(slot) = mag.get_mut(4) {
+                *slot = carry as u64;
+            }
+            return Wide::new(pn, mag, 5);
+        }
+        // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
+        let (big, small, negative) = match p.iter().rev().cmp(q.iter().rev()) {
+            Ordering::Less => (q, p, qn),
+            _ => (p, q, pn),
+        };
+        let mut borrow = false;
+        for (slot, (&x, &y)) in mag.iter_mut().zip(big.iter().zip(&small)) {
+            let (v, b1) = x.overflowing_sub(y);
+            let (v, b2) = v.overflowing_sub(u64::from(borrow));
+            *slot = v;
+            borrow = b1 || b2;
+        }
+        Wide::new(negative, mag, 4)
+    }
+}
+
+/// `a·b` as a sign (negative) and four little-endian limbs of its magnitude: the four
+/// 64-bit partial products, each column summed in `u128` (at most four terms below 2⁶⁴).
+#[cfg_attr(
+    not(any(feature = "mirrors", feature = "refraction")),
+    allow(dead_code)
+)]
+fn product_i128(a: i128, b: i128) -> (bool, [u64; 4]) {
+    let (x, y) = (a.unsigned_abs(), b.unsigned_abs());
+    let low = u128::from(u64::MAX);
+    let (x0, x1, y0, y1) = (x & low, x >> 64, y & low, y >> 64);
+    let (p00, p01, p10, p11) = (x0 * y0, x0 * y1, x1 * y0, x1 * y1);
+    let mid = (p00 >> 64) + (p01 & low) + (p10 & low);
+    let high = (p01 >> 64) + (p10 >> 64) + (p11 & low) + (mid >> 64);
+    // Below 2²⁵⁶: the top limb takes the last carry without overflowing.
+    let top = (p11 >> 64) + (high >> 64);
+    let negative = (a < 0) != (b < 0) && x != 0 && y != 0;
+    (negative, [p00 as u64, mid as u64, high as u64, top as u64])
 }
 
 impl Ord for Wide {
@@ -347,6 +403,48 @@ mod tests {
 
     fn w(v: i128) -> Wide {
         Wide::from_i128(v)
+    }
+
+    /// The `i128` fast path is the general product sum, normalized alike (`==` compares
+    /// values): random lengths and signs, zeros, cancellations and the extremes.
+    #[test]
+    fn mul2_i128_is_mul_add() {
+        let check = |a: i128, b: i128, c: i128, d: i128| {
+            let slow = w(a).mul_add(b, &w(c), d).unwrap();
+            assert_eq!(Wide::mul2_i128(a, b, c, d), slow, "{a} {b} {c} {d}");
+        };
+        let edge = [
+            0,
+            1,
+            -1,
+            i128::MAX,
+            i128::MIN,
+            i128::MIN + 1,
+            1 << 64,
+            -(1 << 64),
+        ];
+        for a in edge {
+            for b in edge {
+                check(a, b, a, b.wrapping_neg());
+                check(a, b, b, a);
+                check(a, b, 1, -1);
+            }
+        }
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
+        let mut value = move || {
+            let v = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 128)) as i128;
+            if next().is_multiple_of(2) {
+                v
+            } else {
+                v.wrapping_neg()
+            }
+        };
+        for _ in 0..20_000 {
+            let (a, b, c, d) = (value(), value(), value(), value());
+            check(a, b, c, d);
+            // Equal magnitudes of opposite signs cancel.
+            check(a, b, a.wrapping_neg(), b);
+        }
     }
 
     #[test]

@@ -10,7 +10,7 @@ use core::cmp::Ordering;
 #[cfg(feature = "alloc")]
 use super::Complex;
 use super::{Cylinder, CylinderId, Storage, Vertex, Wall};
-use crate::geom::sos::Angle;
+use crate::geom::sos::{Angle, KeyedAngle};
 use crate::line_space::Chain;
 use crate::scene::SceneRef;
 
@@ -482,6 +482,21 @@ fn right_rank(w: Wall) -> usize {
     }
 }
 
+/// The position of `layer` in [`far_layers`]`(chain, side)` (`None`: not one of them),
+/// without building the list.
+#[inline]
+fn far_layer_index(chain: Chain, side: Side, layer: Layer) -> Option<usize> {
+    let crossed = match chain.bound {
+        crate::line_space::Bound::Lower => Side::Above,
+        crate::line_space::Bound::Upper => Side::Below,
+    };
+    match (side == crossed, layer) {
+        (true, Layer::Before) | (false, Layer::Around) => Some(0),
+        (true, Layer::After) => Some(1),
+        _ => None,
+    }
+}
+
 /// The layers on side `side` of `chain`: two (before and after the object) where the
 /// object is crossed, one otherwise.
 fn far_layers(chain: Chain, side: Side) -> heapless::Vec<Layer, 2> {
@@ -513,26 +528,48 @@ impl<S: Storage> super::Complex<S> {
         layer: Layer,
         angle: &Angle,
     ) -> Option<CylinderId> {
+        self.across_from_keyed(scene, from, side, layer, &angle.keyed())
+    }
+
+    /// [`Complex::across_from`] with the angle's comparison key computed once (the walk
+    /// has it already).
+    #[inline(always)]
+    pub(crate) fn across_from_keyed(
+        &self,
+        scene: &SceneRef<'_>,
+        from: CylinderId,
+        side: Side,
+        layer: Layer,
+        angle: &KeyedAngle,
+    ) -> Option<CylinderId> {
         let c = self.cylinder(from)?;
         let (chain, arc) = match side {
             Side::Below => (c.bottom?, 0),
             Side::Above => (c.top?, 1),
         };
-        let l = far_layers(chain, side).iter().position(|&x| x == layer)?;
+        let l = far_layer_index(chain, side, layer)?;
         let borders = self.borders_ref();
         let list = borders.tiling(chain, side, layer)?;
         let first = *borders.start.get(from.index())?.get(arc)?.get(l)? as usize;
-        // `angle` lies before `c`'s right wall, so before every wall at or after it: walls
-        // are ordered by vertex index (vertices are sorted by θ), and such a far cylinder
-        // is accepted without reading its wall's angle.
+        // `angle` lies strictly inside `c`'s θ-range, so before every wall at or after its
+        // right wall and after every wall at or before its left wall: walls are ordered by
+        // vertex index (vertices are sorted by θ), so a far cylinder is accepted or passed
+        // over by index, without reading its wall's angle, unless its right wall lies
+        // strictly between `c`'s walls.
         let c_right = right_rank(c.right);
+        let c_left = wall_rank(c.left);
         // The far cylinders overlapping `from` follow each other from `first`.
         for id in list.iter().skip(first) {
             let f = self.cylinder(*id)?;
             let before_right = match f.right {
                 Wall::Zero => true,
                 w if right_rank(w) >= c_right => true,
-                w => angle.cmp_angle(&self.wall_angle(scene, w)?) == Ordering::Less,
+                w if wall_rank(w) <= c_left => false,
+                // The stored angle by reference, from the `BordersRef` at hand.
+                Wall::Vertex(v) => match borders.angle(v.index()) {
+                    Some(a) => angle.cmp_angle(a) == Ordering::Less,
+                    None => angle.cmp_angle(&self.wall_angle(scene, f.right)?) == Ordering::Less,
+                },
             };
             if before_right {
                 return Some(*id);

@@ -102,15 +102,15 @@ use crate::partition::{Complex, CylinderId, Layer, Location, Side, Storage, Wall
 use crate::scene::{ObjectId, SceneRef};
 
 /// Entries of the tangent cache of a ray tree's walkers (two-way set associative, see
-/// [`Walker`]): each frame of a [`TreeScratch`] holds one, 20 bytes an entry, so the
-/// frames' RAM is what counts (sixteen entries save 0.5 % of a hall frame's tree
-/// instructions for 160 B more per frame).
+/// [`Walker`]): each frame of a [`TreeScratch`] holds one, 16 bytes an entry, so the
+/// frames' RAM is what counts (sixteen entries saved 0.5 % of a hall frame's tree
+/// instructions for 160 B more per frame, at 20 bytes an entry).
 const TANGENT_CACHE: usize = 8;
 
 /// Entries of the tangent cache of a view's walk ([`Complex::walk_from`]), one walker on
 /// the stack: a grid view from n = 1024 meets about 40 objects' chains, revisited all
 /// around the circle (32 entries miss a third more often: +3.3 % instructions per view
-/// for 640 B less stack; 128 cost more to clear than they save).
+/// for 512 B less stack; 128 cost more to clear than they save).
 const VIEW_TANGENT_CACHE: usize = 64;
 
 /// How a walk follows a trace across primary walls.
@@ -445,10 +445,13 @@ impl<S: Storage> Complex<S> {
 }
 
 /// One entry of a walk's tangent cache: the object and its `count` tangents from the eye
-/// (vertex, bound), packed (a ray tree keeps a walker per frame).
+/// (vertex, bound), packed (a ray tree keeps a walker per frame): 16 bytes.
 #[derive(Clone, Copy, Debug)]
 struct CachedTangents {
-    object: Option<ObjectId>,
+    /// The object's id; `u32::MAX` in an empty entry, whose `count` 0 is also the truth
+    /// for that id (no scene has that many objects), so a plain integer comparison finds
+    /// an entry.
+    object: u32,
     vertices: [u32; 2],
     bounds: [Bound; 2],
     count: u8,
@@ -456,7 +459,7 @@ struct CachedTangents {
 
 impl CachedTangents {
     const EMPTY: CachedTangents = CachedTangents {
-        object: None,
+        object: u32::MAX,
         vertices: [0; 2],
         bounds: [Bound::Lower; 2],
         count: 0,
@@ -466,7 +469,7 @@ impl CachedTangents {
     fn pack(object: ObjectId, t: [(usize, Bound); 2], count: usize) -> Option<CachedTangents> {
         let [(v0, b0), (v1, b1)] = t;
         Some(CachedTangents {
-            object: Some(object),
+            object: object.0,
             vertices: [u32::try_from(v0).ok()?, u32::try_from(v1).ok()?],
             bounds: [b0, b1],
             count: u8::try_from(count).ok()?,
@@ -649,7 +652,7 @@ impl<const K: usize> Walker<K> {
         // Fibonacci hashing: bits 16 and up of `id · 2³²/φ` pick the set.
         let set = 2 * ((object.0.wrapping_mul(0x9e37_79b9) >> 16) as usize % (K / 2));
         let ways = self.cache.get(set..set + 2).unwrap_or_default();
-        if let Some(e) = ways.iter().find(|e| e.object == Some(object)) {
+        if let Some(e) = ways.iter().find(|e| e.object == object.0) {
             return e.unpack();
         }
         let (t, n) = crate::line_space::tangents_from(scene, object, self.q);
@@ -670,7 +673,6 @@ impl<const K: usize> Walker<K> {
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
     ) -> Result<Option<Step>, WalkError> {
-        use core::cmp::Ordering;
         let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
         let lap = self.lap;
         // The right wall, or a crossing of the bottom or top chain.
@@ -681,37 +683,9 @@ impl<const K: usize> Walker<K> {
                 .map(|_| (lap.saturating_add(1), Angle::ZERO.keyed(), None)),
             w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
         };
-        for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
-            let Some(chain) = chain else { continue };
-            if self.anchor == Anchor::Floor(chain.object) {
-                continue;
-            }
-            let (found, count) = self.tangents(scene, chain.object);
-            for &(h, bound) in found.iter().take(count) {
-                // `tangent_event` by hand: through the call a view costs 1 % more.
-                let forward = Angle::from_query(self.q, ranked(scene, h));
-                // The line q → h lies on `bound`; its reverse on the other chain.
-                let (a, ahead) = if bound == chain.bound {
-                    (forward.keyed(), true)
-                } else {
-                    (forward.reversed().keyed(), false)
-                };
-                if self.last != Some((h, ahead))
-                    && a.cmp(&self.theta) == Ordering::Greater
-                    && best
-                        .as_ref()
-                        .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
-                {
-                    let exit = ChainExit {
-                        chain,
-                        side,
-                        vertex: h,
-                        ahead,
-                    };
-                    best = Some((lap, a, Some(exit)));
-                }
-            }
-        }
+        // Unrolled by hand: the loop over the two chains cost a view 2 % more.
+        self.chain_exit_ccw(scene, c.bottom, Side::Below, &mut best);
+        self.chain_exit_ccw(scene, c.top, Side::Above, &mut best);
         let Some((l, angle, exit)) = best else {
             return match self.end {
                 None => Ok(None), // θ reached 2π
@@ -725,13 +699,103 @@ impl<const K: usize> Walker<K> {
         }
         let next = match exit {
             None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
-            Some(e) => self.cross(complex, scene, e, &angle.angle)?,
+            Some(e) => self.cross(complex, scene, e, &angle)?,
         };
         self.theta = angle;
         self.last = exit.map(|e| (e.vertex, e.ahead));
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
+    }
+
+    /// The crossing of `chain` (the cylinder's chain on `side`) after θ that takes a
+    /// counter-clockwise walk out of the cylinder, into `best` if it comes first.
+    #[inline(always)]
+    fn chain_exit_ccw(
+        &mut self,
+        scene: &SceneRef<'_>,
+        chain: Option<Chain>,
+        side: Side,
+        best: &mut Option<(u8, KeyedAngle, Option<ChainExit>)>,
+    ) {
+        use core::cmp::Ordering;
+        let Some(chain) = chain else { return };
+        if self.anchor == Anchor::Floor(chain.object) {
+            return;
+        }
+        let lap = self.lap;
+        let (found, count) = self.tangents(scene, chain.object);
+        // Counter-clockwise the trace leaves upward through the top chain (a tangent
+        // ahead) and downward through the bottom one (a tangent behind): see
+        // `exits_through`.
+        let wanted = exits_through(side, true);
+        for (k, &(h, bound)) in found.iter().enumerate() {
+            // The line q → h lies on `bound`; its reverse on the other chain.
+            let ahead = bound == chain.bound;
+            if k >= count || ahead != wanted || self.last == Some((h, ahead)) {
+                continue;
+            }
+            // `tangent_event` by hand: through the call a view costs 1 % more.
+            let forward = Angle::from_query(self.q, ranked(scene, h));
+            let a = if ahead {
+                forward.keyed()
+            } else {
+                forward.reversed().keyed()
+            };
+            if a.cmp(&self.theta) == Ordering::Greater
+                && best
+                    .as_ref()
+                    .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
+            {
+                let exit = ChainExit {
+                    chain,
+                    side,
+                    vertex: h,
+                    ahead,
+                };
+                *best = Some((lap, a, Some(exit)));
+            }
+        }
+    }
+
+    /// The mirror image of [`Walker::chain_exit_ccw`]: the crossing of `chain` before θ
+    /// that takes a clockwise walk out of the cylinder (`None` angle in `best`: θ = 2π).
+    #[inline(always)]
+    fn chain_exit_cw(
+        &mut self,
+        scene: &SceneRef<'_>,
+        chain: Option<Chain>,
+        side: Side,
+        best: &mut Option<(u8, Option<KeyedAngle>, Option<ChainExit>)>,
+    ) {
+        use core::cmp::Ordering;
+        let Some(chain) = chain else { return };
+        if self.anchor == Anchor::Floor(chain.object) {
+            return;
+        }
+        let lap = self.lap;
+        let (found, count) = self.tangents(scene, chain.object);
+        let wanted = exits_through(side, false);
+        for (k, &(h, bound)) in found.iter().enumerate() {
+            if k >= count || (bound == chain.bound) != wanted {
+                continue;
+            }
+            let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
+            if (self.full
+                || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
+                && best
+                    .as_ref()
+                    .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
+            {
+                let exit = ChainExit {
+                    chain,
+                    side,
+                    vertex: h,
+                    ahead,
+                };
+                *best = Some((lap, Some(a), Some(exit)));
+            }
+        }
     }
 
     /// One clockwise step: the last exit before θ (the mirror image of `next_ccw`).
@@ -741,7 +805,6 @@ impl<const K: usize> Walker<K> {
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
     ) -> Result<Option<Step>, WalkError> {
-        use core::cmp::Ordering;
         let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
         let lap = self.lap;
         // The left wall, or a crossing of the bottom or top chain; `None` angle: θ = 2π
@@ -752,30 +815,9 @@ impl<const K: usize> Walker<K> {
                 .wall_angle(scene, w)
                 .map(|a| (lap, Some(a.keyed()), None)),
         };
-        for (chain, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
-            let Some(chain) = chain else { continue };
-            if self.anchor == Anchor::Floor(chain.object) {
-                continue;
-            }
-            let (found, count) = self.tangents(scene, chain.object);
-            for &(h, bound) in found.iter().take(count) {
-                let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
-                if (self.full
-                    || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
-                    && best
-                        .as_ref()
-                        .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
-                {
-                    let exit = ChainExit {
-                        chain,
-                        side,
-                        vertex: h,
-                        ahead,
-                    };
-                    best = Some((lap, Some(a), Some(exit)));
-                }
-            }
-        }
+        // Unrolled by hand, as counter-clockwise.
+        self.chain_exit_cw(scene, c.bottom, Side::Below, &mut best);
+        self.chain_exit_cw(scene, c.top, Side::Above, &mut best);
         let Some((l, angle, exit)) = best else {
             return match self.end {
                 None => Ok(None), // θ reached 0
@@ -789,7 +831,7 @@ impl<const K: usize> Walker<K> {
         }
         let next = match (exit, &angle) {
             (None, _) => c.left_neighbour.ok_or(WalkError::Corrupt)?,
-            (Some(e), Some(a)) => self.cross(complex, scene, e, &a.angle)?,
+            (Some(e), Some(a)) => self.cross(complex, scene, e, a)?,
             // A chain crossing always has an angle.
             (Some(_), None) => return Err(WalkError::Corrupt),
         };
@@ -810,7 +852,7 @@ impl<const K: usize> Walker<K> {
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
         exit: ChainExit,
-        angle: &Angle,
+        angle: &KeyedAngle,
     ) -> Result<CylinderId, WalkError> {
         let ChainExit {
             chain, side, ahead, ..
@@ -833,7 +875,7 @@ impl<const K: usize> Walker<K> {
         // The entered cylinder overlaps the one left: scan the far side from there
         // (usually a step or two) instead of bisecting the tiling.
         let next = complex
-            .across_from(scene, self.cur, side, layer, angle)
+            .across_from_keyed(scene, self.cur, side, layer, angle)
             .ok_or(WalkError::Corrupt)?;
         if let Anchor::Floor(m) = self.anchor {
             if complex.cylinder(next).and_then(|n| n.floor) != Some(m) {
@@ -842,6 +884,20 @@ impl<const K: usize> Walker<K> {
         }
         Ok(next)
     }
+}
+
+/// Which tangent events can take a walk out of a cylinder through its chain on `side`:
+/// `true` those whose tangent vertex lies ahead of `q`, `false` those behind. No predicate
+/// is needed. Along the arc of vertex h the chain's offset minus the trace's is
+/// `cross(d, h − q)`, whose derivative in θ is `−dot(d, h − q)`: where the line q → h is
+/// tangent with h ahead (`d` along `h − q`) the trace crosses the chain upward, with h
+/// behind downward (the perturbation keeps the crossing transversal). A trace inside a
+/// cylinder lies above its bottom chain and below its top one, so counter-clockwise it
+/// leaves through the top only at a tangent ahead and through the bottom only at one
+/// behind; clockwise the other way round. Each chain gives one candidate, not two.
+#[inline(always)]
+fn exits_through(side: Side, ccw: bool) -> bool {
+    (side == Side::Above) == ccw
 }
 
 /// The crossing of `chain` by the trace of `q` where it is tangent to the chain's object

@@ -45,7 +45,7 @@ use crate::scene::{Material, ObjectId, SceneRef};
 // Anchored walks (behind screens, mirrors and refractive objects).
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 use {
-    crate::line_space::{ranked, Bound, Chain},
+    crate::line_space::{object_ahead_of_query, ranked, Bound, Chain},
     crate::partition::{Cylinder, Layer, Side, Wall},
 };
 // Changes of eye (mirrors and refractive objects).
@@ -239,7 +239,7 @@ struct Tree<'a, 's, S: Storage> {
 /// object: entry split, exit split and the walk), plus one per screen along the way;
 /// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
 /// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `19 312 + 1 104·N` bytes on x86-64 — `N` frames, and the hops,
+/// Reused across trees. Size: `19 312 + 864·N` bytes on x86-64 — `N` frames, and the hops,
 /// the branch and the 1024-bit exact directions of mapped range ends for the deepest tree
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks
 /// `size_of::<TreeScratch<N>>() ≤ 1.25 KiB · N + 20 KiB`).
@@ -614,7 +614,8 @@ pub fn ray_tree<S: Storage>(
 ///
 /// Only the primary pieces inside the range are followed through mirrors, refractive
 /// objects and screens, so the secondary work is that of the field of view; the primary
-/// walk runs from θ = 0 (starting it at `from` needs point location in a history). The
+/// walk starts at `from`, in the cylinder found through the objects on the line (no history
+/// needed), or at θ = 0 where a vertex lies exactly on that line. The
 /// vertex of the first interval needs the branch just before `from`: where a vertex lies
 /// exactly on the ray at `from`, the piece before it is walked first.
 #[cfg(feature = "alloc")]
@@ -750,7 +751,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     if context && tree.any_vertex_on_ray(q, &f) {
         em.left_of_f = tree.left_of(scratch, q, start, depth, f)?;
     }
-    let primary = tree.primary_walk(q, start, depth, f, t, false);
+    let primary = tree.primary_walk(q, tree.primary_start(q, start, &f), depth, f, t, false);
     scratch.frames.push(Frame::Primary(primary))?;
     tree.drive(scratch, &mut em)?;
     em.finish();
@@ -779,11 +780,13 @@ enum Item {
 }
 
 impl<S: Storage> Tree<'_, '_, S> {
-    /// The primary walk over `(f, t)` from the θ = 0 cylinder `start`.
+    /// The primary walk over `(f, t)` from the cylinder `start` at the angle `theta` (the
+    /// θ = 0 cylinder at θ = 0, or [`Tree::primary_start`]'s at `f`): lap 0 is the same
+    /// unwrapped circle either way.
     fn primary_walk(
         &self,
         q: QueryPoint,
-        start: CylinderId,
+        (start, theta): (CylinderId, Angle),
         depth: usize,
         f: Angle,
         t: Angle,
@@ -794,7 +797,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             q,
             Anchor::Point,
             start,
-            Angle::ZERO,
+            theta,
             Some(Position {
                 lap: 2,
                 angle: Angle::ZERO,
@@ -837,7 +840,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     #[cfg(feature = "alloc")]
     fn first_boundary(&self, q: QueryPoint, start: CylinderId) -> Result<Option<Dir>, WalkError> {
         let zero = Angle::ZERO;
-        let mut walk = self.primary_walk(q, start, 0, zero, zero, false);
+        let mut walk = self.primary_walk(q, (start, zero), 0, zero, zero, false);
         let mut seen = self.complex.ceiling(start);
         while let Some(c) = walk.events.cluster(self.complex, self.scene)? {
             // Round once (lap 1 holds the events at θ = 0 that end the first lap).
@@ -864,7 +867,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         depth: usize,
         f: Angle,
     ) -> Result<Option<Branch>, WalkError> {
-        let mut walk = self.primary_walk(q, start, depth, f, f, true);
+        let mut walk = self.primary_walk(q, (start, Angle::ZERO), depth, f, f, true);
         let mut last = None;
         while let Some(p) = walk.next_piece(self)? {
             last = Some(p);
@@ -1396,13 +1399,229 @@ impl<S: Storage> Tree<'_, '_, S> {
 /// object (behind a screen, a mirror or a refractive object).
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl<S: Storage> Tree<'_, '_, S> {
+    /// Where the primary walk over a range from `f` starts: the cylinder holding the ray
+    /// from `q` at `f`, at `f`, so that the walk skips every event before the range — or
+    /// the θ = 0 cylinder `start` at θ = 0 where that cylinder is not found directly.
+    /// Without a history: the line's objects nearest to `q` behind and ahead are picked in
+    /// `f64` and confirmed exactly — the cylinder with the one behind as floor
+    /// ([`Tree::stack_floor`]) must have its ceiling ahead of `q` (else that ceiling, nearer,
+    /// is tried next); with nothing behind, the cylinder with the one ahead as ceiling
+    /// ([`Tree::stack_ceiling`]) must have its floor behind `q` or none. Only where no
+    /// vertex lies exactly on the line (then no event lies exactly at `f`, and the cylinder
+    /// just after `f` is the one at `f`), `f` is not θ = 0, the line meets an object and
+    /// the complex is not pruned to a region (whose cylinders off `q`'s trace may be
+    /// missing).
+    fn primary_start(&self, q: QueryPoint, start: CylinderId, f: &Angle) -> (CylinderId, Angle) {
+        let fallback = (start, Angle::ZERO);
+        if self.complex.region().is_some() || f.cmp_exact(&Angle::ZERO) == Ordering::Equal {
+            return fallback;
+        }
+        let (Ok(dx), Ok(dy)) = (i64::try_from(f.vector().0), i64::try_from(f.vector().1)) else {
+            return fallback;
+        };
+        let (qx, qy) = (q.x(), q.y());
+        // Per vertex: the exact side of the line (cross product) and the position along
+        // it (`f64`). Bit budget: |d| ≤ 2⁶³, |v − q| ≤ 2⁵⁴: products < 2¹¹⁸, exact in
+        // `i128` from single widening products.
+        let at = |v: usize| {
+            let p = self.qpoint(v);
+            let (wx, wy) = (p.x() - qx, p.y() - qy);
+            let c = i128::from(dx) * i128::from(wy) - i128::from(dy) * i128::from(wx);
+            let along = dx as f64 * wx as f64 + dy as f64 * wy as f64;
+            (c, along)
+        };
+        // The crossings nearest to `q` behind and ahead: (position along the line, object).
+        let mut behind: Option<(f64, ObjectId)> = None;
+        let mut ahead: Option<(f64, ObjectId)> = None;
+        // Of the objects the line misses, the nearest below and above it (exact).
+        let mut below: Option<(i128, ObjectId)> = None;
+        let mut above: Option<(i128, ObjectId)> = None;
+        for (i, obj) in self.scene.objects().iter().enumerate() {
+            let (first, n) = (obj.first_vertex(), obj.len());
+            let Ok(id) = u32::try_from(i) else {
+                return fallback;
+            };
+            if n == 0 {
+                continue;
+            }
+            // The range of the cross product over the bounding box (at the corners that
+            // extremise it): a box on one side of the line holds no vertex on it, and is
+            // read vertex by vertex only if it may lie nearer than the nearest so far.
+            let (lo_box, hi_box) = obj.bbox();
+            let (lo_box, hi_box) = (lo_box.to_query(), hi_box.to_query());
+            let corner = |max: bool| {
+                let x = if (dy > 0) == max {
+                    lo_box.x()
+                } else {
+                    hi_box.x()
+                };
+                let y = if (dx > 0) == max {
+                    hi_box.y()
+                } else {
+                    lo_box.y()
+                };
+                i128::from(dx) * i128::from(y - qy) - i128::from(dy) * i128::from(x - qx)
+            };
+            let (box_lo, box_hi) = (corner(false), corner(true));
+            if box_hi < 0 && below.is_some_and(|(c, _)| box_hi <= c) {
+                continue;
+            }
+            if box_lo > 0 && above.is_some_and(|(c, _)| box_lo >= c) {
+                continue;
+            }
+            let v0 = at(first);
+            let mut prev = v0;
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            let (mut lowest, mut highest) = (v0.0, v0.0);
+            for k in 1..=n {
+                let cur = if k == n { v0 } else { at(first + k) };
+                if cur.0 == 0 {
+                    return fallback;
+                }
+                (lowest, highest) = (lowest.min(cur.0), highest.max(cur.0));
+                if (cur.0 < 0) != (prev.0 < 0) {
+                    // Where the edge crosses the line.
+                    let (ca, cb) = (prev.0 as f64, cur.0 as f64);
+                    let pos = prev.1 + (cur.1 - prev.1) * (ca / (ca - cb));
+                    (lo, hi) = (lo.min(pos), hi.max(pos));
+                }
+                prev = cur;
+            }
+            if highest < 0 {
+                if below.is_none_or(|(c, _)| highest > c) {
+                    below = Some((highest, ObjectId(id)));
+                }
+            } else if lowest > 0 {
+                if above.is_none_or(|(c, _)| lowest < c) {
+                    above = Some((lowest, ObjectId(id)));
+                }
+            } else if hi < 0.0 && behind.is_none_or(|(p, _)| hi > p) {
+                behind = Some((hi, ObjectId(id)));
+            } else if lo >= 0.0 && lo.is_finite() && ahead.is_none_or(|(p, _)| lo < p) {
+                ahead = Some((lo, ObjectId(id)));
+            }
+        }
+        let ahead_of = |o: ObjectId| object_ahead_of_query(self.scene, o, f, q);
+        // Each try moves to an object nearer to `q` along the line.
+        match (behind, ahead) {
+            (Some((_, mut m)), _) => {
+                for _ in 0..self.scene.len() {
+                    if ahead_of(m) != Some(false) {
+                        return fallback;
+                    }
+                    let Some(id) = self.stack_floor(q, m, f, true) else {
+                        return fallback;
+                    };
+                    match self.complex.cylinder(id).map(|c| c.ceiling) {
+                        Some(Some(g)) if ahead_of(g) != Some(true) => m = g,
+                        Some(_) => return (id, *f),
+                        None => return fallback,
+                    }
+                }
+            }
+            (None, Some((_, mut g))) => {
+                for _ in 0..self.scene.len() {
+                    if ahead_of(g) != Some(true) {
+                        return fallback;
+                    }
+                    let Some(id) = self.stack_ceiling(q, g, f) else {
+                        return fallback;
+                    };
+                    match self.complex.cylinder(id).map(|c| c.floor) {
+                        Some(Some(m)) if ahead_of(m) != Some(false) => g = m,
+                        Some(_) => return (id, *f),
+                        None => return fallback,
+                    }
+                }
+            }
+            // The line meets nothing: the empty strip between the nearest objects below
+            // and above it is one cylinder, next to the nearer one's chain.
+            (None, None) => {
+                let (chain, side) = match (below, above) {
+                    (Some((_, o)), _) => (
+                        Chain {
+                            object: o,
+                            bound: Bound::Upper,
+                        },
+                        Side::Above,
+                    ),
+                    (None, Some((_, o))) => (
+                        Chain {
+                            object: o,
+                            bound: Bound::Lower,
+                        },
+                        Side::Below,
+                    ),
+                    (None, None) => return fallback,
+                };
+                let id = self
+                    .complex
+                    .across(self.scene, chain, side, Layer::Around, f);
+                if let Some((id, c)) = id.and_then(|id| Some((id, self.complex.cylinder(id)?))) {
+                    if c.floor.is_none()
+                        && c.ceiling.is_none()
+                        && self.contains_after(q, f, c, true, &[])
+                    {
+                        return (id, *f);
+                    }
+                }
+            }
+        }
+        fallback
+    }
+
+    /// The cylinder with ceiling `g` containing the line through `q` at `f`, for
+    /// [`Tree::primary_start`] (no vertex exactly on the line, `f` not θ = 0, counter-
+    /// clockwise): the cylinders with ceiling `g` at `f` stack up from `g`'s lower chain to
+    /// its upper one; climb until the next chain lies above the line, as
+    /// [`Tree::stack_floor`] climbs a floor's.
+    fn stack_ceiling(&self, q: QueryPoint, g: ObjectId, f: &Angle) -> Option<CylinderId> {
+        let first = Chain {
+            object: g,
+            bound: Bound::Lower,
+        };
+        if self.chain_after(q, f, first, true) != Sign::Negative {
+            return None;
+        }
+        let mut id = self
+            .complex
+            .across(self.scene, first, Side::Above, Layer::Before, f)?;
+        let key = f.keyed();
+        let mut crossed = (first, Sign::Negative);
+        for _ in 0..self.complex.cylinders().len() {
+            let c = self.complex.cylinder(id)?;
+            if c.ceiling != Some(g) {
+                return None;
+            }
+            let Some(t) = c.top else {
+                return self.contains_after(q, f, c, true, &[crossed]).then_some(id);
+            };
+            let side = self.chain_after(q, f, t, true);
+            if side == Sign::Positive {
+                let known = [crossed, (t, side)];
+                return self.contains_after(q, f, c, true, &known).then_some(id);
+            }
+            crossed = (t, side);
+            // Above a lower chain its object is crossed before `g`: the layer starting
+            // there; above an upper chain it is not crossed any more.
+            let layer = match t.bound {
+                Bound::Lower => Layer::After,
+                Bound::Upper => Layer::Around,
+            };
+            id = self
+                .complex
+                .across_from_keyed(self.scene, id, Side::Above, layer, &key)?;
+        }
+        None
+    }
+
     /// Whether a vertex of `object` lies exactly on the line through `eye` with the
     /// direction of `a`. Bit budget: |a| ≤ 2⁶³, |v − eye| ≤ 2⁵⁴: products < 2¹¹⁸.
     fn vertex_on_line(&self, eye: QueryPoint, a: &Angle, object: ObjectId) -> bool {
         let d = a.vector();
         self.scene.object(object).is_some_and(|o| {
             (o.first_vertex()..o.first_vertex() + o.len())
-                .any(|v| cross(d, diff(self.qpoint(v), eye)) == 0)
+                .any(|v| cross_q(d, self.qpoint(v), eye) == 0)
         })
     }
 
@@ -1437,7 +1656,13 @@ impl<S: Storage> Tree<'_, '_, S> {
             Bound::Lower => (Sign::Negative, Sign::Positive),
             Bound::Upper => (Sign::Positive, Sign::Negative),
         };
-        if (first..first + n).any(|v| self.side_after(eye, from, v, ccw) == some) {
+        // A vertex exactly on the line takes the full rule.
+        let d = from.vector();
+        let side = |v: usize| match Sign::of_i128(cross_q(d, self.qpoint(v), eye)) {
+            Sign::Zero => self.side_after(eye, from, v, ccw),
+            s => s,
+        };
+        if (first..first + n).any(|v| side(v) == some) {
             some
         } else {
             none
@@ -1584,6 +1809,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut id = self
             .complex
             .across(self.scene, first, side, Layer::After, &probe)?;
+        let key = probe.keyed();
         // The last chain crossed, on the eye's side of the line (for `contains_after`).
         let mut crossed = (first, inward);
         for _ in 0..self.complex.cylinders().len() {
@@ -1613,7 +1839,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             } else {
                 Layer::Around
             };
-            id = self.complex.across(self.scene, next, side, layer, &probe)?;
+            // The cylinder entered overlaps `c` in θ: a short scan from `c`'s place in the
+            // tiling, not a search of it.
+            id = self
+                .complex
+                .across_from_keyed(self.scene, id, side, layer, &key)?;
         }
         None
     }
@@ -1653,6 +1883,15 @@ impl<S: Storage> Tree<'_, '_, S> {
             .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw, &[]))
             .and_then(|(i, _)| CylinderId::from_index(i))
             .ok_or(WalkError::NoStart)
+    }
+}
+
+/// Without anchored walks (no ray type past the primary view compiled) the primary walk
+/// starts at θ = 0.
+#[cfg(not(any(feature = "mirrors", feature = "refraction", feature = "screens")))]
+impl<S: Storage> Tree<'_, '_, S> {
+    fn primary_start(&self, _: QueryPoint, start: CylinderId, _: &Angle) -> (CylinderId, Angle) {
+        (start, Angle::ZERO)
     }
 }
 
@@ -1863,9 +2102,19 @@ impl<S: Storage> Tree<'_, '_, S> {
         // without an exact direction (`d` itself is exact) `den` is the one above.
         let exact = match end.exact(exacts) {
             Some(x) => Wide::cross(x, e).and_then(|den| scaled_hit(x, &den, num, pn)),
+            // All in `i128`: two products each, at most 2²⁵⁵ (`scaled_hit` without its
+            // general loops).
             None => {
-                let x = (Wide::from_i128(d.0), Wide::from_i128(d.1));
-                scaled_hit(&x, &Wide::from_i128(den), num, pn)
+                let s = Sign::of_i128(den);
+                let hit = |p: i128, d: i128| {
+                    let h = Wide::mul2_i128(den, p, d, num);
+                    if s == Sign::Negative {
+                        h.neg()
+                    } else {
+                        h
+                    }
+                };
+                Some((hit(pn.0, d.0), hit(pn.1, d.1)))
             }
         };
         // Kept on the stack of exact directions until the frame walking it is popped.
@@ -2247,6 +2496,19 @@ fn wraps(a: &Angle) -> bool {
         && a.cmp_angle(&Angle::constant(Direction { x: 1, y: -1 })) == Ordering::Greater
 }
 
+/// `cross(d, p − e)`, with single widening products where `d` fits in 64 bits (every
+/// direction of a walk does: a `Direction`, or a difference of query points); `p − e` does
+/// (`< 2⁵⁴`). Bit budget as [`cross`].
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+#[inline]
+fn cross_q(d: (i128, i128), p: QueryPoint, e: QueryPoint) -> i128 {
+    let (wx, wy) = (p.x() - e.x(), p.y() - e.y());
+    match (i64::try_from(d.0), i64::try_from(d.1)) {
+        (Ok(x), Ok(y)) => i128::from(x) * i128::from(wy) - i128::from(y) * i128::from(wx),
+        _ => d.0 * i128::from(wy) - d.1 * i128::from(wx),
+    }
+}
+
 fn cross(u: (i128, i128), v: (i128, i128)) -> i128 {
     u.0 * v.1 - u.1 * v.0
 }
@@ -2471,5 +2733,90 @@ mod tests {
         if let Some(h) = hit {
             assert!(libm::fabs(h.first - 3.5) < 1e-9 && libm::fabs(h.length - 11.5) < 1e-9);
         }
+    }
+
+    /// The primary walk of a range starts at `f` in the cylinder the walk from θ = 0 is in
+    /// just after `f`, found through the objects behind, ahead or (a line that meets
+    /// nothing) beside the eye; it falls back to θ = 0 only where a vertex lies on the line.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    #[test]
+    fn primary_start_is_where_the_walk_from_zero_is() {
+        use super::{Anchor, Tree, Walker};
+        use crate::geom::predicates::Direction;
+        use crate::geom::sos::Angle;
+        use core::cmp::Ordering;
+        let tri = |x: i32, y: i32| {
+            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
+            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
+        };
+        let objects = [
+            (Material::Mirror, rect(-9, -2, -7, 3)),
+            (Material::Opaque, tri(2, 5)),
+            (Material::Opaque, rect(4, -6, 9, -5)),
+            (Material::Opaque, tri(-5, -9)),
+            (Material::Mirror, rect(6, 1, 7, 8)),
+            (Material::Opaque, tri(-4, 6)),
+        ];
+        let s = Scene::new(objects.iter().map(|(m, p)| (*m, p.as_slice()))).unwrap();
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let tree = Tree {
+            complex: &c,
+            scene: &s,
+        };
+        let (mut routes, mut fallbacks) = ([0usize; 3], 0);
+        let mut seed = 7u64;
+        let mut next = |m: u64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) % m
+        };
+        for _ in 0..3000 {
+            let (x, y) = (
+                next(2400) as f64 / 100.0 - 12.0,
+                next(2400) as f64 / 100.0 - 12.0,
+            );
+            let q = QueryPoint::from_f64(x, y).unwrap();
+            let Ok(start) = c.trace_start(&s, q) else {
+                continue;
+            };
+            // Random directions, and now and then one through a vertex.
+            let d = if next(8) == 0 {
+                let v = s.vertices()[next(s.vertices().len() as u64) as usize].to_query();
+                Direction::new(v.x() - q.x(), v.y() - q.y()).unwrap()
+            } else {
+                let (dx, dy) = (next(2001) as i64 - 1000, next(2001) as i64 - 1000);
+                Direction::new(dx << next(30), dy << next(30)).unwrap_or(Direction { x: 1, y: 0 })
+            };
+            let f = Angle::constant(d);
+            let (id, theta) = tree.primary_start(q, start, &f);
+            if theta.cmp_exact(&Angle::ZERO) == Ordering::Equal {
+                assert_eq!(id, start);
+                fallbacks += 1;
+                continue;
+            }
+            let mut walker: Walker = Walker::new(q, Anchor::Point, start, Angle::ZERO, None, true);
+            let mut at = start;
+            while let Some(step) = walker.next_step(&c, &s).unwrap() {
+                if step.angle.cmp_exact(&f) == Ordering::Greater {
+                    break;
+                }
+                at = step.cylinder;
+            }
+            assert_eq!(id, at, "q {q:?} d {d:?}");
+            let cyl = c.cylinder(id).unwrap();
+            routes[match (cyl.floor, cyl.ceiling) {
+                (Some(_), _) => 0,
+                (None, Some(_)) => 1,
+                (None, None) => 2,
+            }] += 1;
+        }
+        // Every route is taken, and the fallback is rare.
+        assert!(routes.iter().all(|&r| r > 20), "{routes:?}");
+        assert!(
+            fallbacks * 4 < routes.iter().sum::<usize>(),
+            "{fallbacks} {routes:?}"
+        );
     }
 }

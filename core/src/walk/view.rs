@@ -403,7 +403,13 @@ fn nearest_of_event(
     // The run on the line through `h`, both ways round the polygon (at most n vertices).
     for forward in [true, false] {
         for step in 1..n {
-            let j = (if forward { i + step } else { i + n - step }) % n;
+            // `i ± step` round the polygon (`i < n`, `step < n`), without a division.
+            let j = match (forward, i + step) {
+                (true, j) if j >= n => j - n,
+                (true, j) => j,
+                (false, _) if step <= i => i - step,
+                (false, _) => i + n - step,
+            };
             match along(first + j) {
                 Some(a) => consider(first + j, a),
                 None => break,
