@@ -1118,10 +1118,22 @@ impl Hits {
         dir: (f64, f64),
         branch: &[ObjectId],
     ) -> Option<Hit> {
+        self.along_from(scene, eye, eye.to_f64(), dir, branch)
+    }
+
+    /// [`Hits::along`] with `e = eye.to_f64()` (converted once per frame by
+    /// [`centre_hits`]).
+    fn along_from(
+        &mut self,
+        scene: &SceneRef<'_>,
+        eye: QueryPoint,
+        e: (f64, f64),
+        dir: (f64, f64),
+        branch: &[ObjectId],
+    ) -> Option<Hit> {
         if branch.len() > MAX_BRANCH {
             return hit_along(scene, eye, dir, branch);
         }
-        let e = eye.to_f64();
         if e != self.eye {
             self.eye = e;
             self.len = 0;
@@ -1170,11 +1182,16 @@ impl Hits {
             if !(den < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
                 return None;
             }
-            let t = (lin.num / den).max(0.0);
+            // The distance only where it is output: a division per level saved.
             if level == 0 {
-                first = t;
+                first = (lin.num / den).max(0.0);
             }
             if level == last {
+                let t = if level == 0 {
+                    first
+                } else {
+                    (lin.num / den).max(0.0)
+                };
                 return Some(Hit {
                     first,
                     length: t,
@@ -1314,6 +1331,7 @@ pub fn centre_hits<I: Interval>(
         ..Hits::new()
     };
     let mut sweep = None;
+    let e = camera.eye.to_f64();
     for (c, centre) in camera.centre_vectors().enumerate() {
         let k = if intervals.is_empty() {
             0
@@ -1324,7 +1342,7 @@ pub fn centre_hits<I: Interval>(
         };
         let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
         let dir = (centre.0 as f64, centre.1 as f64);
-        each(c, k, hits.along(scene, camera.eye, dir, branch));
+        each(c, k, hits.along_from(scene, camera.eye, e, dir, branch));
     }
 }
 

@@ -44,7 +44,8 @@ mod viewpoints;
 #[path = "../../firmware/src/app.rs"]
 mod app;
 
-/// Serializes the tests of this file, so that the measured regions see less noise.
+/// Serializes the tests of this file: every test takes it, so that no other test's
+/// allocations land in a measured region (the counter is global to the process).
 static LOCK: Mutex<()> = Mutex::new(());
 
 fn lock() -> std::sync::MutexGuard<'static, ()> {
@@ -319,6 +320,7 @@ fn firmware_viewpoints_are_fresh() {
 /// counts, and every buffer is exactly as long as the file needs.
 #[test]
 fn firmware_capacities_are_the_header_counts() {
+    let _g = lock();
     let h = vcx::format::Header::read(app::VCX).expect("header");
     let counts = [h.objects, h.scene_vertices, h.complex_vertices, h.cylinders];
     let capacities = [
@@ -691,6 +693,7 @@ fn lock_step_ray_trees_allocate_nothing() {
 /// scratch's size is within the documented `1.25 KiB · N + 20 KiB`.
 #[test]
 fn tree_scratch_is_bounded() {
+    let _g = lock();
     use vcx::geom::predicates::Direction;
     use vcx::walk::{frame_tree_into, TreeScratch};
     let scene = generate(SceneKind::Hall, 8, 2).expect("generator").scene;

@@ -455,7 +455,23 @@ impl Angle {
     /// Exact (unperturbed) order on the circle by angle in `[0, 2π)` from +x: `Equal` for
     /// exactly the same direction. For output decisions such as dropping events of zero
     /// angular width; construction and walking use [`Angle::cmp_angle`].
+    #[inline]
     pub fn cmp_exact(&self, other: &Angle) -> Ordering {
+        // Differences in `i64` (they always fit for coordinates in range), products
+        // widened: one multiplication each instead of a full `i128` one (a view compares
+        // every event ahead with the one before).
+        #[cfg(not(feature = "naive-f64"))]
+        if let (Some((ux, uy)), Some((vx, vy))) = (self.vector64(), other.vector64()) {
+            let (hu, hv) = (upper_half64(ux, uy), upper_half64(vx, vy));
+            if hu != hv {
+                return if hu {
+                    Ordering::Less
+                } else {
+                    Ordering::Greater
+                };
+            }
+            return 0.cmp(&(i128::from(ux) * i128::from(vy) - i128::from(uy) * i128::from(vx)));
+        }
         let (ux, uy) = self.head.minus(self.tail);
         let (vx, vy) = other.head.minus(other.tail);
         let (hu, hv) = (upper_half(ux, uy), upper_half(vx, vy));
@@ -475,6 +491,25 @@ impl Angle {
     /// The direction vector (head − tail) on the query grid, exact.
     pub fn vector(&self) -> (i128, i128) {
         self.head.minus(self.tail)
+    }
+
+    /// `self.cmp_exact(&Angle::ZERO) == Equal`: the direction is exactly +x.
+    #[inline]
+    pub(crate) fn is_exactly_zero(&self) -> bool {
+        #[cfg(not(feature = "naive-f64"))]
+        if let Some((x, y)) = self.vector64() {
+            return y == 0 && x > 0;
+        }
+        self.cmp_exact(&Angle::ZERO) == Ordering::Equal
+    }
+
+    /// [`Angle::vector`] if it fits `i64` (always, for coordinates in range).
+    #[inline]
+    pub(crate) fn vector64(&self) -> Option<(i64, i64)> {
+        Some((
+            self.head.x.checked_sub(self.tail.x)?,
+            self.head.y.checked_sub(self.tail.y)?,
+        ))
     }
 
     /// The angle in radians in `[0, 2π)`, for output only.
@@ -562,6 +597,13 @@ impl Angle {
         #[cfg(not(feature = "naive-f64"))]
         Sign::of_i128(dx * wx + dy * wy)
     }
+}
+
+/// [`upper_half`] in `i64`.
+#[cfg(not(feature = "naive-f64"))]
+#[inline]
+fn upper_half64(x: i64, y: i64) -> bool {
+    y > 0 || (y == 0 && x > 0)
 }
 
 /// An [`Angle`] with its half-plane and its exact direction vector (when it fits `i64`,

@@ -184,3 +184,33 @@ pub fn is_free(scene: &SceneRef<'_>, t: &Bitangent) -> bool {
         !between
     })
 }
+
+/// Which objects of a vertex (a directed bitangent through P then Q) a corner face — one of
+/// the four wedges around the vertex, see [`crate::partition`] — has as floor and ceiling:
+/// P is crossed between the line's ends in the wedge or not, Q likewise.
+#[cfg(any(feature = "alloc", feature = "format"))]
+#[derive(Clone, Copy)]
+pub(crate) struct Corner {
+    pub(crate) p_crossed: bool,
+    pub(crate) q_crossed: bool,
+}
+
+#[cfg(any(feature = "alloc", feature = "format"))]
+impl Corner {
+    /// Whether a cylinder with this floor and ceiling is the corner face: (X, Y) for no
+    /// object crossed, (P, Y) for P, (X, Q) for Q and (P, Q) for both.
+    pub(crate) fn matches(
+        self,
+        b: &Bitangent,
+        floor: Option<ObjectId>,
+        ceiling: Option<ObjectId>,
+    ) -> bool {
+        let (p, q) = (Some(b.first_object), Some(b.second_object));
+        match (self.p_crossed, self.q_crossed) {
+            (false, false) => floor != p && floor != q && ceiling != p && ceiling != q,
+            (true, false) => floor == p && ceiling != q,
+            (false, true) => ceiling == q && floor != p,
+            (true, true) => floor == p && ceiling == q,
+        }
+    }
+}

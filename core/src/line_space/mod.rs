@@ -22,6 +22,8 @@ mod visibility;
 
 #[cfg(feature = "format")]
 pub(crate) use bitangent::tangency;
+#[cfg(any(feature = "alloc", feature = "format"))]
+pub(crate) use bitangent::Corner;
 pub use bitangent::{bitangents, is_free, Bitangent};
 #[cfg(feature = "alloc")]
 pub use cross_section::{cross_section, Interval};
@@ -111,7 +113,6 @@ pub fn tangents_from(
     object: ObjectId,
     q: crate::geom::QueryPoint,
 ) -> ([(usize, Bound); 2], usize) {
-    use crate::geom::sos::orient_query;
     let mut out = [(0, Bound::Lower); 2];
     let mut found = 0;
     let Some(obj) = scene.object(object) else {
@@ -126,12 +127,35 @@ pub fn tangents_from(
     // vertex's `sn` (the perturbed determinant changes sign with a swap like the exact one).
     // Edge k → next (both below n, so no division: a view computes these for about 55
     // objects, and a `%` per index cost 2–3 % of its wall time).
-    let edge = |k: usize, next: usize| {
-        orient_query(ranked(scene, first + k), ranked(scene, first + next), q)
+    //
+    // orient(a, b, q) = cross(a − q, b − q): each vertex's offset from `q` is computed once
+    // (query grid, `i64`), the exact sign read from it, the perturbation only where it is
+    // exactly zero (or an offset does not fit `i64`, never in range).
+    let vertices = scene.vertices().get(first..).unwrap_or_default();
+    let rel = |k: usize| -> Option<(i64, i64)> {
+        let v = vertices.get(k)?.to_query();
+        Some((v.x().checked_sub(q.x())?, v.y().checked_sub(q.y())?))
     };
-    let mut sn_prev = edge(n - 1, 0);
+    let edge = |k: usize, wk: Option<(i64, i64)>, next: usize, wn: Option<(i64, i64)>| {
+        #[cfg(not(feature = "naive-f64"))]
+        if let (Some((ax, ay)), Some((bx, by))) = (wk, wn) {
+            match Sign::of_i128(i128::from(ax) * i128::from(by) - i128::from(ay) * i128::from(bx)) {
+                Sign::Zero => {}
+                s => return s,
+            }
+        }
+        #[cfg(feature = "naive-f64")]
+        let _ = (wk, wn);
+        edge_side_tie(scene, first + k, first + next, q)
+    };
+    let w0 = rel(0);
+    let mut sn_prev = edge(n - 1, rel(n - 1), 0, w0);
+    let mut wk = w0;
     for k in 0..n {
-        let sn = edge(k, if k + 1 == n { 0 } else { k + 1 });
+        let next = if k + 1 == n { 0 } else { k + 1 };
+        let wn = if next == 0 { w0 } else { rel(next) };
+        let sn = edge(k, wk, next, wn);
+        wk = wn;
         let sp = sn_prev.flip();
         sn_prev = sn;
         if sp == sn {
@@ -147,6 +171,14 @@ pub fn tangents_from(
         }
     }
     (out, found)
+}
+
+/// `orient_query` of the vertices of global indices `a` and `b` and `q`, through the
+/// perturbed predicate (for an edge exactly collinear with `q`: rare, kept out of line).
+#[cold]
+#[inline(never)]
+fn edge_side_tie(scene: &SceneRef<'_>, a: usize, b: usize, q: crate::geom::QueryPoint) -> Sign {
+    crate::geom::sos::orient_query(ranked(scene, a), ranked(scene, b), q)
 }
 
 /// The vertex with global index `i` and its perturbation rank.

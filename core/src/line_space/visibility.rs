@@ -48,7 +48,7 @@ use alloc::vec::Vec;
 use core::cmp::Ordering;
 
 use super::bitangent::{bitangents, chain_bitangent, is_free};
-use super::{cross_section, Bitangent, Bound, Chain, Interval};
+use super::{cross_section, Bitangent, Bound, Chain, Corner, Interval};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::{self, Angle, RankedPoint};
 use crate::geom::Sign;
@@ -267,25 +267,6 @@ impl Heap {
     fn pop(&mut self) -> Option<Event> {
         let slot = self.events.first()?.cylinder as usize;
         self.remove(slot)
-    }
-}
-
-/// Which objects of a vertex a corner face has as floor and ceiling (as in the sweep).
-#[derive(Clone, Copy)]
-struct Corner {
-    p_crossed: bool,
-    q_crossed: bool,
-}
-
-impl Corner {
-    fn matches(self, b: &Bitangent, floor: Option<ObjectId>, ceiling: Option<ObjectId>) -> bool {
-        let (p, q) = (Some(b.first_object), Some(b.second_object));
-        match (self.p_crossed, self.q_crossed) {
-            (false, false) => floor != p && floor != q && ceiling != p && ceiling != q,
-            (true, false) => floor == p && ceiling != q,
-            (false, true) => ceiling == q && floor != p,
-            (true, true) => floor == p && ceiling == q,
-        }
     }
 }
 

@@ -11,8 +11,7 @@
 //! chain on one side: the layers before and after its object).
 
 use super::{Cylinder, CylinderId, Vertex, VertexId, Wall};
-use crate::line_space::{Bitangent, Bound, Chain};
-use crate::scene::ObjectId;
+use crate::line_space::{Bound, Chain, Corner};
 
 /// A placeholder cylinder for storage the replay fills.
 pub const BLANK: Cylinder = Cylinder {
@@ -89,26 +88,6 @@ impl Open<'_> {
                     .filter(|s| **s == Some(id))
                     .for_each(|s| *s = None);
             }
-        }
-    }
-}
-
-/// Which objects of a vertex a corner face has as floor and ceiling.
-#[derive(Clone, Copy)]
-struct Corner {
-    p_crossed: bool,
-    q_crossed: bool,
-}
-
-impl Corner {
-    /// Whether an open cylinder with this floor and ceiling is the corner face.
-    fn matches(self, b: &Bitangent, floor: Option<ObjectId>, ceiling: Option<ObjectId>) -> bool {
-        let (p, q) = (Some(b.first_object), Some(b.second_object));
-        match (self.p_crossed, self.q_crossed) {
-            (false, false) => floor != p && floor != q && ceiling != p && ceiling != q,
-            (true, false) => floor == p && ceiling != q,
-            (false, true) => ceiling == q && floor != p,
-            (true, true) => floor == p && ceiling == q,
         }
     }
 }

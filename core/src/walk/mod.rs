@@ -444,44 +444,66 @@ impl<S: Storage> Complex<S> {
     }
 }
 
-/// One entry of a walk's tangent cache: the object and its `count` tangents from the eye
-/// (vertex, bound), packed (a ray tree keeps a walker per frame): 16 bytes.
+/// One entry of a walk's tangent cache: the object and its tangent vertices from the eye
+/// indexed by the chain on which the line from the eye through them lies (`Lower`,
+/// `Upper`), packed (a ray tree keeps a walker per frame): 16 bytes. An eye outside a
+/// convex object has exactly two tangents, one on each chain (the edges' sides of the line
+/// change sign twice round the polygon, once each way); inside, none.
 #[derive(Clone, Copy, Debug)]
 struct CachedTangents {
-    /// The object's id; `u32::MAX` in an empty entry, whose `count` 0 is also the truth
-    /// for that id (no scene has that many objects), so a plain integer comparison finds
-    /// an entry.
+    /// The object's id; `u32::MAX` in an empty entry, whose `two: false` (no tangents) is
+    /// also the truth for that id (no scene has that many objects), so a plain integer
+    /// comparison finds an entry.
     object: u32,
+    /// By [`Bound`]: `Lower`, `Upper`.
     vertices: [u32; 2],
-    bounds: [Bound; 2],
-    count: u8,
+    /// The eye is outside: both tangents exist (otherwise there are none).
+    two: bool,
+}
+
+/// The index of a bound in [`CachedTangents::vertices`].
+#[inline(always)]
+fn bound_index(b: Bound) -> usize {
+    match b {
+        Bound::Lower => 0,
+        Bound::Upper => 1,
+    }
 }
 
 impl CachedTangents {
     const EMPTY: CachedTangents = CachedTangents {
         object: u32::MAX,
         vertices: [0; 2],
-        bounds: [Bound::Lower; 2],
-        count: 0,
+        two: false,
     };
 
-    /// `None` if a vertex index does not fit (then the tangents are not cached).
+    /// `None` if a vertex index does not fit or the tangents are not one per chain or
+    /// none (then they are not cached).
     fn pack(object: ObjectId, t: [(usize, Bound); 2], count: usize) -> Option<CachedTangents> {
         let [(v0, b0), (v1, b1)] = t;
+        let mut vertices = [0; 2];
+        match count {
+            0 => {}
+            2 if b0 != b1 => {
+                *vertices.get_mut(bound_index(b0))? = u32::try_from(v0).ok()?;
+                *vertices.get_mut(bound_index(b1))? = u32::try_from(v1).ok()?;
+            }
+            _ => return None,
+        }
         Some(CachedTangents {
             object: object.0,
-            vertices: [u32::try_from(v0).ok()?, u32::try_from(v1).ok()?],
-            bounds: [b0, b1],
-            count: u8::try_from(count).ok()?,
+            vertices,
+            two: count == 2,
         })
     }
 
-    fn unpack(&self) -> ([(usize, Bound); 2], usize) {
-        let ([v0, v1], [b0, b1]) = (self.vertices, self.bounds);
-        (
-            [(v0 as usize, b0), (v1 as usize, b1)],
-            usize::from(self.count),
-        )
+    /// The tangent vertex on `bound`, if any.
+    #[inline(always)]
+    fn on(&self, bound: Bound) -> Option<usize> {
+        if !self.two {
+            return None;
+        }
+        self.vertices.get(bound_index(bound)).map(|&v| v as usize)
     }
 }
 
@@ -646,24 +668,39 @@ impl<const K: usize> Walker<K> {
         r
     }
 
-    /// The tangents from `q` to `object`, through the cache.
+    /// The tangent vertex from `q` to `object` on chain `bound` (the line from `q` through
+    /// it lies on that chain), through the cache; `None` if there is none.
     #[inline]
-    fn tangents(&mut self, scene: &SceneRef<'_>, object: ObjectId) -> ([(usize, Bound); 2], usize) {
+    fn tangent_on(
+        &mut self,
+        scene: &SceneRef<'_>,
+        object: ObjectId,
+        bound: Bound,
+    ) -> Option<usize> {
         // Fibonacci hashing: bits 16 and up of `id · 2³²/φ` pick the set.
         let set = 2 * ((object.0.wrapping_mul(0x9e37_79b9) >> 16) as usize % (K / 2));
         let ways = self.cache.get(set..set + 2).unwrap_or_default();
         if let Some(e) = ways.iter().find(|e| e.object == object.0) {
-            return e.unpack();
+            return e.on(bound);
         }
         let (t, n) = crate::line_space::tangents_from(scene, object, self.q);
-        if let (Some(new), Some([first, second])) = (
+        match (
             CachedTangents::pack(object, t, n),
             self.cache.get_mut(set..set + 2),
         ) {
-            *second = *first;
-            *first = new;
+            (Some(new), Some([first, second])) => {
+                *second = *first;
+                *first = new;
+                new.on(bound)
+            }
+            (Some(new), _) => new.on(bound),
+            // Not one tangent per chain (not a convex object): the first on `bound`.
+            (None, _) => t
+                .iter()
+                .take(n)
+                .find(|&&(_, b)| b == bound)
+                .map(|&(h, _)| h),
         }
-        (t, n)
     }
 
     /// One counter-clockwise step: the first exit after θ.
@@ -724,37 +761,36 @@ impl<const K: usize> Walker<K> {
             return;
         }
         let lap = self.lap;
-        let (found, count) = self.tangents(scene, chain.object);
         // Counter-clockwise the trace leaves upward through the top chain (a tangent
         // ahead) and downward through the bottom one (a tangent behind): see
-        // `exits_through`.
-        let wanted = exits_through(side, true);
-        for (k, &(h, bound)) in found.iter().enumerate() {
-            // The line q → h lies on `bound`; its reverse on the other chain.
-            let ahead = bound == chain.bound;
-            if k >= count || ahead != wanted || self.last == Some((h, ahead)) {
-                continue;
-            }
-            // `tangent_event` by hand: through the call a view costs 1 % more.
-            let forward = Angle::from_query(self.q, ranked(scene, h));
-            let a = if ahead {
-                forward.keyed()
-            } else {
-                forward.reversed().keyed()
+        // `exits_through`. The line q → h lies on the chain of h's tangent, its reverse on
+        // the other: the candidate is the tangent on this chain (ahead) or the other one.
+        let ahead = exits_through(side, true);
+        let Some(h) = self.tangent_on(scene, chain.object, tangent_bound(chain, ahead)) else {
+            return;
+        };
+        if self.last == Some((h, ahead)) {
+            return;
+        }
+        // `tangent_event` by hand: through the call a view costs 1 % more.
+        let forward = Angle::from_query(self.q, ranked(scene, h));
+        let a = if ahead {
+            forward.keyed()
+        } else {
+            forward.reversed().keyed()
+        };
+        if a.cmp(&self.theta) == Ordering::Greater
+            && best
+                .as_ref()
+                .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
+        {
+            let exit = ChainExit {
+                chain,
+                side,
+                vertex: h,
+                ahead,
             };
-            if a.cmp(&self.theta) == Ordering::Greater
-                && best
-                    .as_ref()
-                    .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
-            {
-                let exit = ChainExit {
-                    chain,
-                    side,
-                    vertex: h,
-                    ahead,
-                };
-                *best = Some((lap, a, Some(exit)));
-            }
+            *best = Some((lap, a, Some(exit)));
         }
     }
 
@@ -774,27 +810,24 @@ impl<const K: usize> Walker<K> {
             return;
         }
         let lap = self.lap;
-        let (found, count) = self.tangents(scene, chain.object);
         let wanted = exits_through(side, false);
-        for (k, &(h, bound)) in found.iter().enumerate() {
-            if k >= count || (bound == chain.bound) != wanted {
-                continue;
-            }
-            let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
-            if (self.full
-                || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
-                && best
-                    .as_ref()
-                    .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
-            {
-                let exit = ChainExit {
-                    chain,
-                    side,
-                    vertex: h,
-                    ahead,
-                };
-                *best = Some((lap, Some(a), Some(exit)));
-            }
+        let Some(h) = self.tangent_on(scene, chain.object, tangent_bound(chain, wanted)) else {
+            return;
+        };
+        let bound = tangent_bound(chain, wanted);
+        let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
+        if (self.full || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
+            && best
+                .as_ref()
+                .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
+        {
+            let exit = ChainExit {
+                chain,
+                side,
+                vertex: h,
+                ahead,
+            };
+            *best = Some((lap, Some(a), Some(exit)));
         }
     }
 
@@ -898,6 +931,18 @@ impl<const K: usize> Walker<K> {
 #[inline(always)]
 fn exits_through(side: Side, ccw: bool) -> bool {
     (side == Side::Above) == ccw
+}
+
+/// The chain on which the line from the eye through a tangent vertex of `chain`'s object
+/// lies, for the crossings of `chain` with the vertex ahead (`chain` itself) or behind
+/// (the other one: the reversed line lies on `chain`).
+#[inline(always)]
+fn tangent_bound(chain: Chain, ahead: bool) -> Bound {
+    match (chain.bound, ahead) {
+        (b, true) => b,
+        (Bound::Lower, false) => Bound::Upper,
+        (Bound::Upper, false) => Bound::Lower,
+    }
 }
 
 /// The crossing of `chain` by the trace of `q` where it is tangent to the chain's object

@@ -50,9 +50,12 @@ fn div_rem(x: i128, d: i128) -> (i128, i128) {
 fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> i128 {
     // With `kd = 1` and `td + kn·g` in `i128` (a mirror: `kn = −1`, `< 2¹¹⁸`) the value is
     // one fraction over `N`: the same floor and remainder with one division.
-    let one = (kd == 1)
-        .then(|| kn.checked_mul(g)?.checked_add(td))
-        .flatten();
+    let one = match (kn, kd) {
+        // A mirror: `td − g` without the multiplication's overflow check.
+        (-1, 1) => td.checked_sub(g),
+        (_, 1) => kn.checked_mul(g).and_then(|x| x.checked_add(td)),
+        _ => None,
+    };
     let (base, s, den) = match one {
         Some(num) => {
             let (q, s) = div_rem(num, n);

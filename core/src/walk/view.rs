@@ -225,7 +225,7 @@ fn sweep<S: Storage>(
     q: QueryPoint,
     out: &mut impl Sink,
 ) -> Result<(), WalkError> {
-    let on_zero = |a: &Angle| a.cmp_exact(&Angle::ZERO) == Ordering::Equal;
+    let on_zero = |a: &Angle| a.is_exactly_zero();
     let mut start_object: Option<Option<ObjectId>> = None;
     // The leading run at θ = 0 (P), the current cluster of the middle, the trailing run (Z).
     let mut lead: Option<Cluster> = None;
@@ -384,10 +384,22 @@ fn nearest_of_event(
         return nearest_on_ray(scene, q, angle, objects);
     };
     let (dx, dy) = angle.vector();
+    let d64 = angle.vector64();
     // `Some(along)` for a vertex on the line, in multiples of |d|.
     let along = |k: usize| {
         let v = scene.vertices().get(k)?.to_query();
-        let (wx, wy) = (i128::from(v.x() - q.x()), i128::from(v.y() - q.y()));
+        let (wx, wy) = (v.x() - q.x(), v.y() - q.y());
+        // `i64` factors where they fit (always, in range): one multiplication per product.
+        if let Some((dx, dy)) = d64 {
+            let (dx, dy, wx, wy) = (
+                i128::from(dx),
+                i128::from(dy),
+                i128::from(wx),
+                i128::from(wy),
+            );
+            return (dx * wy == dy * wx).then_some(dx * wx + dy * wy);
+        }
+        let (wx, wy) = (i128::from(wx), i128::from(wy));
         (dx * wy == dy * wx).then_some(dx * wx + dy * wy)
     };
     // As the scan picks: the smallest `along`, then the smallest index.
