@@ -524,7 +524,7 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
          n because ids grow: a varint takes one more byte past 2⁷, 2¹⁴ and 2²¹ cylinders or \
          vertices. The history part is {} of the file with history (each node stored as 8 \
          ids plus a child count). Walk RAM: the bytes a primary walk of the loaded file \
-         needs besides its stack (about 3.5 KiB, ARCHITECTURE.md) — the decoded vertices and \
+         needs besides its stack (about 4 KiB on Cortex-M, ARCHITECTURE.md) — the decoded vertices and \
          cylinders, the derived state without vertex angles, and a view's output buffer \
          (`size_of` on this machine; the formula is in ARCHITECTURE.md, \"Storage and walk \
          RAM\"): the file is small, but a device decodes every cylinder into RAM, {} bytes \
