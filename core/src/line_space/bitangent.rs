@@ -213,4 +213,38 @@ impl Corner {
             (true, true) => floor == p && ceiling == q,
         }
     }
+
+    /// The corners of the top, bottom, left and right wedges of vertex `b` (the table in
+    /// [`crate::partition`]).
+    pub(crate) fn wedges(b: &Bitangent) -> [Corner; 4] {
+        let (p, q) = (
+            b.first_bound == Bound::Lower,
+            b.second_bound == Bound::Lower,
+        );
+        let corner = |p_crossed, q_crossed| Corner {
+            p_crossed,
+            q_crossed,
+        };
+        [corner(p, q), corner(!p, !q), corner(p, !q), corner(!p, q)]
+    }
+
+    /// The floor and ceiling of this (the right) wedge's face, from the floors and ceilings
+    /// of the three corner faces the vertex closes: X, the object before `p`, is the floor
+    /// of the one whose floor is neither P nor Q, and Y, the one after `q`, likewise the
+    /// ceiling. `None` if a needed one is missing (inconsistent input).
+    pub(crate) fn face(
+        self,
+        b: &Bitangent,
+        closed: [(Option<ObjectId>, Option<ObjectId>); 3],
+    ) -> Option<(Option<ObjectId>, Option<ObjectId>)> {
+        let (p, q) = (Some(b.first_object), Some(b.second_object));
+        let x = || closed.iter().find(|c| c.0 != p && c.0 != q).map(|c| c.0);
+        let y = || closed.iter().find(|c| c.1 != p && c.1 != q).map(|c| c.1);
+        Some(match (self.p_crossed, self.q_crossed) {
+            (false, false) => (x()?, y()?),
+            (true, false) => (p, y()?),
+            (false, true) => (x()?, q),
+            (true, true) => (p, q),
+        })
+    }
 }

@@ -433,13 +433,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
             second: (event.q.rank as usize).checked_sub(1)?,
             second_bound: cq.bound,
         };
-        let (p_lower, q_lower) = (cp.bound == Bound::Lower, cq.bound == Bound::Lower);
-        let corner = |p_crossed, q_crossed| Corner {
-            p_crossed,
-            q_crossed,
-        };
-        let (top, bottom) = (corner(p_lower, q_lower), corner(!p_lower, !q_lower));
-        let (left_corner, right) = (corner(p_lower, !q_lower), corner(!p_lower, q_lower));
+        let [top, bottom, left_corner, right] = Corner::wedges(&b);
 
         // Top wedge: bottom arc switches from Q's chain to P's.
         let t = self.find(false, cq, top, &b)?;
@@ -453,22 +447,8 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         let (ct, cd, cl) = (self.close(t)?, self.close(d)?, self.close(l)?);
 
         // The right wedge's face, from the floors and ceilings just closed.
-        let (p, q) = (Some(b.first_object), Some(b.second_object));
-        let known = [ct, cd, cl];
-        let x = known
-            .iter()
-            .find(|c| c.floor != p && c.floor != q)
-            .map(|c| c.floor);
-        let y = known
-            .iter()
-            .find(|c| c.ceiling != p && c.ceiling != q)
-            .map(|c| c.ceiling);
-        let (floor, ceiling) = match (right.p_crossed, right.q_crossed) {
-            (false, false) => (x?, y?),
-            (true, false) => (p, y?),
-            (false, true) => (x?, q),
-            (true, true) => (p, q),
-        };
+        let closed = [ct, cd, cl].map(|c| (c.floor, c.ceiling));
+        let (floor, ceiling) = right.face(&b, closed)?;
         self.open_cylinder(
             Interval {
                 bottom: Some(cp),

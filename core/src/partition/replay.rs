@@ -143,26 +143,7 @@ pub(crate) fn replay(
             object: b.second_object,
             bound: b.second_bound,
         };
-        let (p_lower, q_lower) = (
-            b.first_bound == Bound::Lower,
-            b.second_bound == Bound::Lower,
-        );
-        let top = Corner {
-            p_crossed: p_lower,
-            q_crossed: q_lower,
-        };
-        let bottom = Corner {
-            p_crossed: !p_lower,
-            q_crossed: !q_lower,
-        };
-        let left = Corner {
-            p_crossed: p_lower,
-            q_crossed: !q_lower,
-        };
-        let right = Corner {
-            p_crossed: !p_lower,
-            q_crossed: q_lower,
-        };
+        let [top, bottom, left, right] = Corner::wedges(&b);
 
         let lost = ReplayError::Lost(vi);
         let cylinders_now: &[Cylinder] = cylinders;
@@ -199,24 +180,9 @@ pub(crate) fn replay(
         };
         let (ct, cd, cl) = (close(t)?, close(d)?, close(l)?);
 
-        // The right wedge's face, from the floors and ceilings just closed: X is the object
-        // before p and Y the one after q.
-        let (p, q) = (Some(b.first_object), Some(b.second_object));
-        let known = [ct, cd, cl];
-        let x = known
-            .iter()
-            .find(|c| c.floor != p && c.floor != q)
-            .map(|c| c.floor);
-        let y = known
-            .iter()
-            .find(|c| c.ceiling != p && c.ceiling != q)
-            .map(|c| c.ceiling);
-        let (floor, ceiling) = match (right.p_crossed, right.q_crossed) {
-            (false, false) => (x.ok_or(lost)?, y.ok_or(lost)?),
-            (true, false) => (p, y.ok_or(lost)?),
-            (false, true) => (x.ok_or(lost)?, q),
-            (true, true) => (p, q),
-        };
+        // The right wedge's face, from the floors and ceilings just closed.
+        let closed = [ct, cd, cl].map(|c| (c.floor, c.ceiling));
+        let (floor, ceiling) = right.face(&b, closed).ok_or(lost)?;
 
         let first = initial + 3 * vi;
         let (id_t, id_d) = (id_of(first)?, id_of(first + 1)?);
