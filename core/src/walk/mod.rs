@@ -810,11 +810,10 @@ impl<const K: usize> Walker<K> {
             return;
         }
         let lap = self.lap;
-        let wanted = exits_through(side, false);
-        let Some(h) = self.tangent_on(scene, chain.object, tangent_bound(chain, wanted)) else {
+        let bound = tangent_bound(chain, exits_through(side, false));
+        let Some(h) = self.tangent_on(scene, chain.object, bound) else {
             return;
         };
-        let bound = tangent_bound(chain, wanted);
         let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
         if (self.full || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
             && best

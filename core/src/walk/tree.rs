@@ -1426,9 +1426,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let at = |v: usize| {
             let p = self.qpoint(v);
             let (wx, wy) = (p.x() - qx, p.y() - qy);
-            let c = i128::from(dx) * i128::from(wy) - i128::from(dy) * i128::from(wx);
             let along = dx as f64 * wx as f64 + dy as f64 * wy as f64;
-            (c, along)
+            (cross_q((dx.into(), dy.into()), p, q), along)
         };
         // The crossings nearest to `q` behind and ahead: (position along the line, object).
         let mut behind: Option<(f64, ObjectId)> = None;
