@@ -39,6 +39,7 @@ const RUST_INPUTS: &[(&str, &str)] = &[
     ("ray_tree", "boundary_vertex_mirror_corner.rs"),
     ("ray_tree", "thin_interval_below_2pi.rs"),
     ("ray_tree", "spurious_sliver_diagonal.rs"),
+    ("ray_tree", "no_start_refracted_end_off_edge.rs"),
 ];
 
 fn dir(target: &str) -> PathBuf {
@@ -231,6 +232,13 @@ fn ray_tree_thin_interval_below_2pi() {
 fn ray_tree_spurious_sliver_diagonal() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/spurious_sliver_diagonal.rs");
+    assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
+}
+
+#[test]
+fn ray_tree_no_start_refracted_end_off_edge() {
+    let input: RayTreeInput =
+        include!("../../fuzz/regressions/ray_tree/no_start_refracted_end_off_edge.rs");
     assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
 }
 

@@ -2096,6 +2096,13 @@ impl<S: Storage> Tree<'_, '_, S> {
         if libm::fabs(vx) > lim || libm::fabs(vy) > lim {
             return Err(WalkError::Corrupt);
         }
+        // The rounded line must still cross the edge strictly (exact: products of 2⁵² · 2⁵³):
+        // a hit closer to an endpoint than the rounding is that endpoint, or the walk
+        // behind the edge would start on a line that misses the object.
+        let v = (vx as i128, vy as i128);
+        if cross_q(v, a, hop.next).signum() * cross_q(v, b, hop.next).signum() >= 0 {
+            return Ok(self.toward(hop.next, if u < 0.5 { hop.a } else { hop.b }));
+        }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
         // The same exactly, scaled by |den|: `(prev − next)·den + num·d`; from an end
         // without an exact direction (`d` itself is exact) `den` is the one above.
