@@ -130,11 +130,12 @@ pub fn tangents_from(
     //
     // orient(a, b, q) = cross(a − q, b − q): each vertex's offset from `q` is computed once
     // (query grid, `i64`), the exact sign read from it, the perturbation only where it is
-    // exactly zero (or an offset does not fit `i64`, never in range).
+    // exactly zero.
     let vertices = scene.vertices().get(first..).unwrap_or_default();
     let rel = |k: usize| -> Option<(i64, i64)> {
         let v = vertices.get(k)?.to_query();
-        Some((v.x().checked_sub(q.x())?, v.y().checked_sub(q.y())?))
+        // Within ±2⁴⁶ and ±2⁵²: the difference fits, the subtraction never wraps.
+        Some((v.x().wrapping_sub(q.x()), v.y().wrapping_sub(q.y())))
     };
     let edge = |k: usize, wk: Option<(i64, i64)>, next: usize, wn: Option<(i64, i64)>| {
         #[cfg(not(feature = "naive-f64"))]

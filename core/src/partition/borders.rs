@@ -416,7 +416,9 @@ impl<'a> BordersRef<'a> {
         self.angles.get(v)
     }
 
-    /// The cylinders bordering `chain` on `side` in `layer`, sorted by θ.
+    /// The cylinders bordering `chain` on `side` in `layer`, sorted by θ. Inlined: a view
+    /// looks up a tiling at every chain crossing.
+    #[inline]
     fn tiling(&self, chain: Chain, side: Side, layer: Layer) -> Option<&'a [CylinderId]> {
         range(self.offsets, slot(chain, side, layer)).and_then(|r| self.ids.get(r))
     }
@@ -460,6 +462,7 @@ fn sort_by_key(ids: &mut [CylinderId], key: &dyn Fn(&CylinderId) -> i64) {
 }
 
 /// The id range of tiling `k`.
+#[inline]
 fn range(offsets: &[u32], k: usize) -> Option<core::ops::Range<usize>> {
     let a = *offsets.get(k)? as usize;
     let b = *offsets.get(k + 1)? as usize;
@@ -662,6 +665,7 @@ fn zero_levels(len: usize) -> u32 {
 
 impl<'a, 's> ZeroIndex<'a, 's> {
     /// The closed height range of cylinder `id` at θ = 0.
+    #[inline]
     fn span(&self, id: CylinderId) -> (i64, i64) {
         self.cylinders
             .get(id.index())

@@ -4,7 +4,7 @@
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
-use super::WalkError;
+use super::{Anchor, WalkError, Walker, VIEW_TANGENT_CACHE};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
@@ -226,25 +226,23 @@ fn sweep<S: Storage>(
     out: &mut impl Sink,
 ) -> Result<(), WalkError> {
     let on_zero = |a: &Angle| a.is_exactly_zero();
-    let mut start_object: Option<Option<ObjectId>> = None;
+    // The walker's loop here rather than `walk_trace` with a closure: the closure was not
+    // inlined, and most steps (secondary walls, tangents behind `q`) need only the filter.
+    let start = complex.trace_start(scene, q)?;
+    let start_object = complex.ceiling(start);
+    let mut walker =
+        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, start, Angle::ZERO, None, true);
     // The leading run at θ = 0 (P), the current cluster of the middle, the trailing run (Z).
     let mut lead: Option<Cluster> = None;
     let mut middle: Option<Cluster> = None;
     let mut tail: Option<Cluster> = None;
     let mut in_lead = true;
     // The object seen before the current middle cluster.
-    let mut seen: Option<ObjectId> = None;
-    let mut result: Result<(), WalkError> = Ok(());
-    complex.walk_trace(scene, q, |s| {
-        if start_object.is_none() {
-            let ceiling = complex.ceiling(s.cylinder);
-            start_object = Some(ceiling);
-            seen = ceiling;
-            return;
-        }
+    let mut seen: Option<ObjectId> = start_object;
+    while let Some(s) = walker.next_step_in::<S, true>(complex, scene)? {
         // Only a tangent vertex ahead of `q` can change the view.
         let (Some(v), true) = (s.vertex, s.ahead) else {
-            return;
+            continue;
         };
         let ceiling = complex.ceiling(s.cylinder);
         let event = Cluster {
@@ -264,20 +262,18 @@ fn sweep<S: Storage>(
                 None => lead = Some(event),
             }
             seen = ceiling;
-            return;
+            continue;
         }
         in_lead = false;
         if let Some(t) = &mut tail {
             join(t);
-            return;
+            continue;
         }
         match &mut middle {
             Some(m) if m.angle.cmp_exact(&s.angle) == Ordering::Equal => join(m),
             _ => {
                 if let Some(m) = middle.take() {
-                    if result.is_ok() {
-                        result = emit(scene, q, &m, &mut seen, out);
-                    }
+                    emit(scene, q, &m, &mut seen, out)?;
                 }
                 if on_zero(&s.angle) {
                     tail = Some(event);
@@ -286,12 +282,10 @@ fn sweep<S: Storage>(
                 }
             }
         }
-    })?;
-    result?;
+    }
     if let Some(m) = middle.take() {
         emit(scene, q, &m, &mut seen, out)?;
     }
-    let start_object = start_object.flatten();
     // The first cluster: Z then P, seen after the last middle cluster (or P, seen at the
     // start of the walk).
     let first = match (tail, lead) {
@@ -385,6 +379,28 @@ fn nearest_of_event(
     };
     let (dx, dy) = angle.vector();
     let d64 = angle.vector64();
+    // Mostly `h` alone is on the line: the event's direction is `h − q` itself (so `h` lies
+    // ahead) and neither neighbour of `h` lies on the line, so the runs below stop at once.
+    if let Some((dx, dy)) = d64 {
+        let rel = |k: usize| {
+            let v = scene.vertices().get(k)?.to_query();
+            Some((v.x() - q.x(), v.y() - q.y()))
+        };
+        let off_line = |k: usize| {
+            rel(k).is_some_and(|(wx, wy)| {
+                i128::from(dx) * i128::from(wy) != i128::from(dy) * i128::from(wx)
+            })
+        };
+        let next = if i + 1 >= n { 0 } else { i + 1 };
+        let prev = if i == 0 { n.saturating_sub(1) } else { i - 1 };
+        if (dx, dy) != (0, 0)
+            && rel(h) == Some((dx, dy))
+            && off_line(first + next)
+            && off_line(first + prev)
+        {
+            return Some(h);
+        }
+    }
     // `Some(along)` for a vertex on the line, in multiples of |d|.
     let along = |k: usize| {
         let v = scene.vertices().get(k)?.to_query();
