@@ -111,11 +111,17 @@ impl Edge {
     }
 }
 
-/// `x` rounded to an integer (ties to even) for `|x| ≤ 2⁵¹`: adding and subtracting
-/// 1.5·2⁵² leaves no fraction bits, in two hardware additions (`libm::round` is software).
-fn round_small(x: f64) -> f64 {
-    const MAGIC: f64 = 6_755_399_441_055_744.0;
-    (x + MAGIC) - MAGIC
+/// 1.5·2⁵²: adding it to `|x| ≤ 2⁵¹` leaves an integer in `[2⁵², 2⁵³)`, where the `f64`
+/// step is 1.
+const MAGIC: f64 = 6_755_399_441_055_744.0;
+
+/// `x` rounded to an integer (ties to even) for `|x| ≤ 2⁵¹`: adding 1.5·2⁵² leaves no
+/// fraction bits, and in `[2⁵², 2⁵³)` the bits of `x + MAGIC` are those of `MAGIC` plus
+/// the integer, so one integer subtraction reads it — a hardware addition instead of the
+/// software `libm::round`, and no saturating float-to-integer conversion (a frame rounds
+/// two per column edge and centre).
+fn round_small_i64(x: f64) -> i64 {
+    ((x + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
 }
 
 /// A perspective camera with `width` columns (see the module documentation).
@@ -210,7 +216,7 @@ impl Camera {
         // `max`, not `libm::fmax` (a software routine): the magnitudes are never NaN.
         let m = libm::fabs(d.0).max(libm::fabs(d.1));
         let k = EDGE_SCALE / m;
-        (round_small(d.0 * k) as i64, round_small(d.1 * k) as i64)
+        (round_small_i64(d.0 * k), round_small_i64(d.1 * k))
     }
 
     fn rounded(&self, x: f64) -> Edge {
@@ -1361,7 +1367,7 @@ fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::round_small;
+    use super::round_small_i64;
 
     /// The magic-number rounding agrees with `libm::round` away from ties, rounds ties to
     /// even, and is exact up to the largest edge component 2⁵⁰ (and beyond, to 2⁵¹).
@@ -1385,11 +1391,11 @@ mod tests {
             2.0 * big - 1.0,
             -(2.0 * big) + 1.0,
         ] {
-            assert_eq!(round_small(x), libm::round(x), "{x}");
+            assert_eq!(round_small_i64(x) as f64, libm::round(x), "{x}");
         }
-        assert_eq!(round_small(0.5), 0.0);
-        assert_eq!(round_small(1.5), 2.0);
-        assert_eq!(round_small(-2.5), -2.0);
-        assert_eq!(round_small(big + 0.5), big);
+        assert_eq!(round_small_i64(0.5), 0);
+        assert_eq!(round_small_i64(1.5), 2);
+        assert_eq!(round_small_i64(-2.5), -2);
+        assert_eq!(round_small_i64(big + 0.5), big as i64);
     }
 }

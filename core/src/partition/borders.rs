@@ -609,6 +609,41 @@ impl<S: Storage> super::Complex<S> {
         };
         inside.then_some(id)
     }
+
+    /// [`Complex::across`] with the angle's comparison key computed once and the walls'
+    /// stored angles read by reference (an anchored walk's start climbs from here).
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    pub(crate) fn across_keyed(
+        &self,
+        scene: &SceneRef<'_>,
+        chain: Chain,
+        side: Side,
+        layer: Layer,
+        angle: &KeyedAngle,
+    ) -> Option<CylinderId> {
+        let borders = self.borders_ref();
+        let list = borders.tiling(chain, side, layer)?;
+        // `angle` against the wall `w`: `Greater` past it (θ = 0 lies before all).
+        let cmp = |w: Wall| match w {
+            Wall::Zero => Some(Ordering::Greater),
+            Wall::Vertex(v) => match borders.angle(v.index()) {
+                Some(a) => Some(angle.cmp_angle(a)),
+                None => Some(angle.cmp_angle(&self.wall_angle(scene, w)?)),
+            },
+        };
+        let k = list.partition_point(|&id| {
+            self.cylinder(id)
+                .and_then(|c| cmp(c.left))
+                .is_some_and(|o| o == Ordering::Greater)
+        });
+        let id = *list.get(k.checked_sub(1)?)?;
+        let c = self.cylinder(id)?;
+        let inside = match c.right {
+            Wall::Zero => true,
+            w => cmp(w).is_some_and(|o| o == Ordering::Less),
+        };
+        inside.then_some(id)
+    }
 }
 
 /// The index of the cross-section at θ = 0, where every view starts (the walk's start
