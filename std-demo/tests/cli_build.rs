@@ -360,3 +360,64 @@ fn bad_scene_files() {
         &[b, "invalid JSON"],
     );
 }
+
+/// `vcx build --no-compaction` (search path compaction off, §4.4): the same complex and a
+/// larger history (the mixed scene has insertions that both split and merge), reported
+/// by `--stats-json` with `"compaction": false` and written with the compacted flag clear,
+/// which `vcx inspect --json` (a full decode) reads back with the same node count; with
+/// `--method sweep` (no history) it is an error.
+#[test]
+fn no_compaction_builds_a_larger_history_of_the_same_complex() {
+    let path = example("mixed");
+    let p = path.to_str().unwrap();
+    let dir = std::env::temp_dir().join(format!("vcx-cli-build-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let (a, b) = (out("compacted.vcx"), out("uncompacted.vcx"));
+    let parse = |line: String| -> Value { serde_json::from_str(&line).unwrap() };
+    let with = parse(one_line_ok(&[
+        "build",
+        p,
+        "--stats-json",
+        "--history",
+        "always",
+        "-o",
+        &a,
+    ]));
+    let without = parse(one_line_ok(&[
+        "build",
+        p,
+        "--stats-json",
+        "--history",
+        "always",
+        "--no-compaction",
+        "-o",
+        &b,
+    ]));
+    assert!(with.get("compaction").is_none(), "{with}");
+    assert_eq!(without["compaction"], false, "{without}");
+    for key in ["free_bitangents", "complex_vertices", "faces", "cylinders"] {
+        assert_eq!(with[key], without[key], "{key}");
+    }
+    for key in ["history_nodes", "history_links"] {
+        assert!(
+            without[key].as_u64() > with[key].as_u64(),
+            "{key}: {with} {without}"
+        );
+    }
+    assert!(without["history_depth"].as_u64() >= with["history_depth"].as_u64());
+    for (file, stats, compacted) in [(&a, &with, true), (&b, &without, false)] {
+        let info = parse(one_line_ok(&["inspect", file, "--json"]));
+        assert_eq!(info["compacted"], compacted, "{info}");
+        assert_eq!(
+            info["parts"]["history"]["nodes"], stats["history_nodes"],
+            "{info}"
+        );
+    }
+    let line = one_line_ok(&["build", p, "--no-compaction"]);
+    assert!(line.contains(", uncompacted)"), "{line}");
+    fails(
+        &["build", p, "--method", "sweep", "--no-compaction"],
+        &["--no-compaction"],
+    );
+}

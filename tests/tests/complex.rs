@@ -253,7 +253,8 @@ mod against_reference {
     /// brute-force `Complex::locate`, the history's `locate`, and the history's
     /// sheet-anchored `locate_on_sheet` of the backward object from the same point and from
     /// virtual points moved back along the ray (behind or inside that object: the same
-    /// perturbed line, so the same segment). Origins and directions are drawn to hit
+    /// perturbed line, so the same segment); both history locates also on the history built
+    /// without search path compaction, on the same rays. Origins and directions are drawn to hit
     /// degeneracies: vertices, edge extensions, bitangents. 16 000 rays per family, over
     /// 10⁵ from free points in all.
     #[test]
@@ -274,6 +275,17 @@ mod against_reference {
             )
             .unwrap();
             h.validate(&s).unwrap();
+            // The same without search path compaction (§4.4): judged on the same rays.
+            let hu = History::build(
+                &s,
+                &BuildOptions {
+                    seed: checked as u64,
+                    compaction: false,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            hu.validate(&s).unwrap();
             let v = s.vertices();
             let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
             for p in v {
@@ -348,6 +360,12 @@ mod against_reference {
                             wanted,
                             "history: {name} {q:?} {d:?}"
                         );
+                        let (_, uc) = hu.locate(&s, q, d).expect("uncompacted locate");
+                        assert_eq!(
+                            (uc.ceiling, uc.floor),
+                            wanted,
+                            "uncompacted history: {name} {q:?} {d:?}"
+                        );
                         if let Some(m) = want.backward {
                             // Virtual eyes k·d/256 behind q on the same line.
                             let k = rng.gen_range(0i64..=64);
@@ -361,6 +379,15 @@ mod against_reference {
                                     (sc.ceiling, sc.floor),
                                     wanted,
                                     "sheet of {m:?}: {name} eye {e:?} (q {q:?}) d {d:?}"
+                                );
+                                let (_, su) =
+                                    hu.locate_on_sheet(&s, m, e, d).unwrap_or_else(|| {
+                                        panic!("uncompacted sheet: {name} {e:?} {d:?}")
+                                    });
+                                assert_eq!(
+                                    (su.ceiling, su.floor),
+                                    wanted,
+                                    "uncompacted, sheet of {m:?}: {name} eye {e:?} d {d:?}"
                                 );
                                 on_sheet += 1;
                             }

@@ -1366,6 +1366,85 @@ fn history_round_trip_hall() {
     history_round_trip("hall", 3000);
 }
 
+/// A history built without search path compaction (§4.4) is written with the compacted
+/// flag clear and loads back as it was: the same arenas, not compacted, `locate` and
+/// `locate_on_sheet` as the original's. Setting the flag on it is refused (its piece
+/// nodes are not compacted); clearing it on a compacted history is accepted.
+#[test]
+fn uncompacted_history_round_trip() {
+    use vcx::partition::ComplexError;
+    let s = example("mixed");
+    let sr = s.as_ref();
+    let h = History::build(
+        &sr,
+        &BuildOptions {
+            seed: 3,
+            compaction: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(!h.is_compacted());
+    let c = h.complex(&sr).unwrap();
+    let options = EncodeOptions {
+        seed: Some(3),
+        compacted: true,
+        explicit_cylinders: false,
+    };
+    let bytes = encode(&sr, &c, Some(&h), &options).unwrap();
+    let header = Header::read(&bytes).unwrap();
+    assert!(header.has_history() && !header.compacted);
+    assert_eq!(header.history_nodes as usize, h.stats().nodes);
+    let loaded = decode(&bytes).unwrap();
+    let back = loaded.history.as_ref().unwrap();
+    assert!(!back.is_compacted());
+    assert_eq!(back.to_parts(), h.to_parts());
+    assert_eq!(back.stats(), h.stats());
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for (q, d) in random_rays(&sr, 500, 9) {
+        let a = h.locate(&sr, q, d).map(|(i, c)| (i, *c));
+        assert_eq!(a, back.locate(&sr, q, d).map(|(i, c)| (i, *c)));
+        let m = ObjectId(rng.gen_range(0..sr.len() as u32));
+        let a = h.locate_on_sheet(&sr, m, q, d).map(|(i, c)| (i, *c));
+        assert_eq!(a, back.locate_on_sheet(&sr, m, q, d).map(|(i, c)| (i, *c)));
+    }
+    // The flag set on the uncompacted history: refused, naming a piece node.
+    let compacted = History::build(
+        &sr,
+        &BuildOptions {
+            seed: 3,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        h.stats().nodes > compacted.stats().nodes,
+        "no piece nodes on this scene"
+    );
+    let flags = format::offset::FLAGS;
+    let mut b = bytes.clone();
+    b[flags] |= format::FLAG_COMPACTED as u8;
+    reseal(&mut b);
+    let e = decode(&b).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FormatError::History {
+                error: ComplexError::History { what, .. },
+                ..
+            } if what.contains("piece")
+        ),
+        "{e:?}"
+    );
+    // The flag cleared on a compacted history: a valid (trivially uncompacted) history.
+    let mut b = encode(&sr, &c, Some(&compacted), &options).unwrap();
+    assert!(Header::read(&b).unwrap().compacted);
+    b[flags] &= !(format::FLAG_COMPACTED as u8);
+    reseal(&mut b);
+    let loaded = decode(&b).unwrap();
+    assert!(!loaded.history.unwrap().is_compacted());
+}
+
 /// A file with history decodes without allocation too: the history part is skipped
 /// (devices walk without it), the arenas equal those of the file without history.
 #[test]

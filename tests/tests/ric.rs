@@ -160,6 +160,15 @@ fn history_locate_agrees_with_the_complex() {
             },
         )
         .unwrap();
+        let uncompacted = History::build(
+            &s,
+            &vcx::partition::BuildOptions {
+                seed,
+                compaction: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         let c = build_by_sweep(&s).unwrap();
         let v = s.vertices();
         for _ in 0..3000 {
@@ -191,6 +200,11 @@ fn history_locate_agrees_with_the_complex() {
                     (want.floor, want.ceiling),
                     "{kind:?} {q:?} {d:?}"
                 );
+                // Without compaction: the same live cylinder (ids differ).
+                let (_, u) = uncompacted
+                    .locate(&s, q, d)
+                    .unwrap_or_else(|| panic!("{kind:?}: uncompacted: none for {q:?} {d:?}"));
+                assert!(same_trapezoid(u, got), "{kind:?} uncompacted {q:?} {d:?}");
                 checked += 1;
             }
         }
@@ -291,4 +305,147 @@ fn construction_continues_identically_after_a_round_trip() {
             h.validate(&s).unwrap();
         }
     }
+}
+
+/// The pieces undoing compaction adds to a compacted history: one per link `C → C′` where
+/// `C` has several children and `C′` several parents (counted from the parts).
+fn expected_pieces(p: &vcx::partition::HistoryParts) -> usize {
+    let mut parents = vec![0usize; p.nodes.len()];
+    for c in &p.links {
+        parents[c.index()] += 1;
+    }
+    p.children
+        .iter()
+        .filter(|k| k.1 >= 2)
+        .map(|&(start, len)| {
+            p.links[start as usize..(start + len) as usize]
+                .iter()
+                .filter(|c| parents[c.index()] >= 2)
+                .count()
+        })
+        .sum()
+}
+
+/// Whether two cylinders have the same trapezoid and layer (all but the neighbour ids).
+fn same_trapezoid(a: &vcx::partition::Cylinder, b: &vcx::partition::Cylinder) -> bool {
+    (a.floor, a.ceiling, a.bottom, a.top, a.left, a.right)
+        == (b.floor, b.ceiling, b.bottom, b.top, b.left, b.right)
+}
+
+/// A history's nodes, children (as lists) and insertion ranges with every piece node (a
+/// dead node whose one child has its record) contracted: `C → P → C′` becomes `C → C′`.
+#[allow(clippy::type_complexity)]
+fn contracted(
+    p: &vcx::partition::HistoryParts,
+) -> (
+    Vec<vcx::partition::Cylinder>,
+    Vec<Vec<vcx::partition::CylinderId>>,
+    Vec<u32>,
+) {
+    use vcx::partition::CylinderId;
+    let kids = |i: usize| {
+        let (s, l) = p.children[i];
+        &p.links[s as usize..(s + l) as usize]
+    };
+    let piece = |i: usize| match kids(i) {
+        [only] => same_trapezoid(&p.nodes[i], &p.nodes[only.index()]),
+        _ => false,
+    };
+    let mut id = vec![u32::MAX; p.nodes.len() + 1];
+    let mut next = 0;
+    for (i, slot) in id.iter_mut().enumerate().take(p.nodes.len()) {
+        if !piece(i) {
+            *slot = next;
+            next += 1;
+        }
+    }
+    id[p.nodes.len()] = next;
+    // A start maps to the first kept node at or after it.
+    let first_kept = |j: usize| (j..=p.nodes.len()).map(|k| id[k]).find(|&k| k != u32::MAX);
+    let map = |c: CylinderId| CylinderId::from_index(id[c.index()] as usize).unwrap();
+    let (mut nodes, mut children) = (vec![], vec![]);
+    for i in (0..p.nodes.len()).filter(|&i| !piece(i)) {
+        let c = p.nodes[i];
+        nodes.push(vcx::partition::Cylinder {
+            left_neighbour: c.left_neighbour.map(map),
+            right_neighbour: c.right_neighbour.map(map),
+            ..c
+        });
+        let through = |c: CylinderId| {
+            if piece(c.index()) {
+                kids(c.index())[0]
+            } else {
+                c
+            }
+        };
+        children.push(kids(i).iter().map(|&c| map(through(c))).collect());
+    }
+    let starts = p
+        .starts
+        .iter()
+        .map(|&s| first_kept(s as usize).unwrap())
+        .collect();
+    (nodes, children, starts)
+}
+
+/// Search path compaction as an option (§4.4): without it, 20 seeds give the same live
+/// cylinders as the sweep (and as with it), the DAG passes `validate`, there is one piece
+/// node per link `C → C′` with several children of `C` and several parents of `C′` (some
+/// on this scene: strictly more nodes and links), and contracting the pieces gives back
+/// the compacted history exactly.
+#[test]
+fn uncompacted_histories_contract_to_the_compacted_ones() {
+    use vcx::partition::BuildOptions;
+    let f = generate(SceneKind::Grid, 49, 9).unwrap();
+    let s = f.scene.as_ref();
+    let want = describe(&build_by_sweep(&s).unwrap(), |o| o.0);
+    let mut pieces = 0;
+    for seed in 0..20 {
+        let build = |compaction| {
+            History::build(
+                &s,
+                &BuildOptions {
+                    seed,
+                    compaction,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+        };
+        let (hc, hu) = (build(true), build(false));
+        assert!(hc.is_compacted() && !hu.is_compacted());
+        hu.validate(&s)
+            .unwrap_or_else(|e| panic!("seed {seed}: uncompacted: {e}"));
+        let live = hu.complex(&s).unwrap();
+        assert_eq!(describe(&live, |o| o.0), want, "seed {seed}");
+        assert_eq!(live.cylinders(), hc.complex(&s).unwrap().cylinders());
+        let (c, u) = (hc.to_parts(), hu.to_parts());
+        let k = expected_pieces(&c);
+        let (sc, su) = (hc.stats(), hu.stats());
+        assert_eq!(
+            (su.nodes, su.links),
+            (sc.nodes + k, sc.links + k),
+            "seed {seed}"
+        );
+        assert!(su.depth >= sc.depth);
+        assert_eq!(u.vertices, c.vertices);
+        assert_eq!(u.order, c.order);
+        let kids = |p: &vcx::partition::HistoryParts| -> Vec<Vec<vcx::partition::CylinderId>> {
+            p.children
+                .iter()
+                .map(|&(s, l)| p.links[s as usize..(s + l) as usize].to_vec())
+                .collect()
+        };
+        assert_eq!(
+            contracted(&c),
+            (c.nodes.clone(), kids(&c), c.starts.clone())
+        );
+        assert!(
+            contracted(&u) == (c.nodes.clone(), kids(&c), c.starts.clone()),
+            "seed {seed}: the contracted uncompacted history differs"
+        );
+        pieces += k;
+        println!("seed {seed}: compacted {sc:?}, uncompacted {su:?}");
+    }
+    assert!(pieces > 0, "no insertion both split and merged");
 }

@@ -688,6 +688,8 @@ fn decode_history(
         vertices,
         order,
         starts,
+        // Both kinds load; `History::validate` checks a compacted one has no piece nodes.
+        compacted: h.compacted,
     })
 }
 

@@ -18,9 +18,10 @@ pub struct EncodeOptions {
     /// Seed of the randomized incremental construction (`None`: not recorded, e.g. built
     /// by the rotational sweep).
     pub seed: Option<u64>,
-    /// Whether the history is search-path compacted (§4.4 of the paper). Set in the file
-    /// whenever a history is written, whatever this says: the construction links a
-    /// destroyed cylinder straight to its replacements.
+    /// Whether the history is search-path compacted (§4.4 of the paper). When a history is
+    /// written the flag is the history's own
+    /// ([`HistoryParts::compacted`](crate::partition::HistoryParts::compacted)), whatever
+    /// this says.
     pub compacted: bool,
     /// Store every cylinder (version 1) even where version 3 would store only those at
     /// θ = 0 and let the reader replay the rest: for readers of versions 1 and 2 only.
@@ -38,6 +39,7 @@ struct HistoryView<'h> {
     vertices: &'h [Vertex],
     order: &'h [ObjectId],
     starts: &'h [u32],
+    compacted: bool,
 }
 
 /// Material discriminants (postcard enum encoding: `varint(u32)`, then the fields).
@@ -300,7 +302,7 @@ fn header(
         region: region.is_some(),
         parts,
         seed: options.seed,
-        compacted: options.compacted || history.is_some(),
+        compacted: history.map_or(options.compacted, |h| h.compacted),
         objects: id(scene.len())?,
         scene_vertices: id(scene.vertices().len())?,
         complex_vertices: id(vertices.len())?,
@@ -381,8 +383,9 @@ fn write_file(
 /// construction that built it, in a new vector. With a history, the complex must be its
 /// live partition as [`History::complex`](crate::partition::History::complex) numbers it
 /// (build both by the randomized construction), and the history must have inserted every
-/// object; the header's compacted flag is set, and the file is version 1 (every cylinder
-/// stored). A complex pruned to a region
+/// object; the header's compacted flag is the history's
+/// ([`History::is_compacted`](crate::partition::History::is_compacted)), and the file is
+/// version 1 (every cylinder stored). A complex pruned to a region
 /// ([`Complex::region`](crate::partition::Complex::region)) is written as version 2 with its
 /// region, and without history. Any other complex is written as version 3 (only the
 /// cylinders at θ = 0 stored) unless [`EncodeOptions::explicit_cylinders`].
@@ -435,6 +438,7 @@ fn encode_parts(
         vertices: &p.vertices,
         order: &p.order,
         starts: &p.starts,
+        compacted: p.compacted,
     });
     let region = complex.region();
     let h = header(scene, region.as_ref(), v, c, view.as_ref(), options)?;

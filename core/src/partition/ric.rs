@@ -21,8 +21,10 @@
 //! for every insertion order), which the tests check after every insertion.
 //!
 //! **History**: every cylinder that ever existed is a node; a destroyed cylinder links to
-//! the new cylinders overlapping it. Point location descends from the first cylinder,
-//! choosing at each node the child that contains the query.
+//! the new cylinders overlapping it (search path compaction, §4.4). Point location
+//! descends from the first cylinder, choosing at each node the child that contains the
+//! query. Without compaction ([`BuildOptions::compaction`]) a pass over the finished
+//! history puts piece nodes between the two (`History::uncompact`).
 //!
 //! **Storage.** Cylinders (= history nodes), vertices and links live in flat arenas
 //! addressed by `u32` ids. A node is destroyed by exactly one insertion, so its children
@@ -352,6 +354,8 @@ pub struct History {
     /// insertion are consecutive).
     starts: Vec<u32>,
     budget: Option<Budget>,
+    /// Whether search path compaction was applied (§4.4; [`History::is_compacted`]).
+    compacted: bool,
     scratch: Scratch,
 }
 
@@ -371,6 +375,8 @@ pub struct HistoryParts {
     pub order: Vec<ObjectId>,
     /// `starts[k]`: the first node created by inserting `order[k]`.
     pub starts: Vec<u32>,
+    /// Whether the history is search-path compacted (§4.4; the file header's flag).
+    pub compacted: bool,
 }
 
 /// A 64-bit PCG-style generator: enough for a reproducible shuffle, no dependency.
@@ -386,7 +392,7 @@ fn shuffle(ids: &mut [ObjectId], seed: u64) {
 }
 
 /// Options of the randomized construction.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct BuildOptions {
     /// Seed of the random insertion order (same seed, same complex).
     pub seed: u64,
@@ -395,6 +401,22 @@ pub struct BuildOptions {
     pub first: Vec<ObjectId>,
     /// Memory budget (`None`: unlimited).
     pub budget: Option<Budget>,
+    /// Search path compaction (§4.4; default `true`): link each destroyed cylinder
+    /// straight to the new cylinders overlapping it. `false` records an insertion's split
+    /// and merge as two steps ([`History::is_compacted`]), to measure what compaction
+    /// saves; the live partition is the same.
+    pub compaction: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            seed: 0,
+            first: Vec::new(),
+            budget: None,
+            compaction: true,
+        }
+    }
 }
 
 impl Default for History {
@@ -439,6 +461,7 @@ impl History {
             order: Vec::new(),
             starts: Vec::new(),
             budget: None,
+            compacted: true,
             scratch: Scratch::default(),
         }
     }
@@ -455,7 +478,18 @@ impl History {
         for id in options.first.iter().copied().chain(rest) {
             h.insert(scene, id)?;
         }
+        if !options.compaction {
+            h.uncompact()?;
+        }
         Ok(h)
+    }
+
+    /// Whether the history is search-path compacted (§4.4): every destroyed cylinder
+    /// links straight to the new cylinders overlapping it. Built with
+    /// [`BuildOptions::compaction`] `false`, it is not: an insertion's split and merge are
+    /// two steps (`History::uncompact`).
+    pub fn is_compacted(&self) -> bool {
+        self.compacted
     }
 
     /// Sets (or removes) the memory budget checked by later insertions.
@@ -824,7 +858,9 @@ impl History {
     /// The search starts at the nodes created by `m`'s insertion with floor `m` — they
     /// cover every line crossing `m` at that time — and descends keeping floor = `m`:
     /// later insertions only cut that layer, so exactly one child with floor `m` contains
-    /// the line. No query depends on objects inserted before `m`.
+    /// the line. No query depends on objects inserted before `m`. Without compaction the
+    /// start may be a piece node of that insertion: it carries its one child's record, so
+    /// it contains the line exactly when that child does, and the descent goes on to it.
     pub fn locate_on_sheet(
         &self,
         scene: &SceneRef<'_>,
@@ -875,6 +911,7 @@ impl History {
             vertices: self.vertices.clone(),
             order: self.order.clone(),
             starts: self.starts.clone(),
+            compacted: self.compacted,
         }
     }
 
@@ -891,6 +928,7 @@ impl History {
             vertices,
             order,
             starts,
+            compacted,
         } = parts;
         let bad = |node: usize, what| ComplexError::History { node, what };
         if u32::try_from(nodes.len()).is_err()
@@ -987,6 +1025,7 @@ impl History {
             order,
             starts,
             budget: None,
+            compacted,
             scratch: Scratch::default(),
         };
         h.validate(scene)?;
@@ -1006,7 +1045,9 @@ impl History {
 
     /// Checks the history DAG (the paper's §4.2): every link goes to a younger node (so the
     /// DAG is acyclic and a descent is bounded), every node but the root is reached by a
-    /// link, the leaves are exactly the live cylinders, and — once every object of `scene`
+    /// link, the leaves are exactly the live cylinders, a compacted history
+    /// ([`History::is_compacted`]) has no piece node (a dead node whose one child has its
+    /// trapezoid and layer), and — once every object of `scene`
     /// is inserted — the live cylinders form a valid complex ([`Complex::validate`]).
     pub fn validate(&self, scene: &SceneRef<'_>) -> Result<(), ComplexError> {
         let bad = |node: usize, what| ComplexError::History { node, what };
@@ -1031,6 +1072,18 @@ impl History {
                 }
                 reached[c.index()] = true;
             }
+            // A piece (a split cylinder's part, merged into its one child) carries its
+            // child's record: a compacted history has none.
+            if let ([only], Some(c)) = (kids, self.cylinders.get(i)) {
+                if self.compacted
+                    && self
+                        .cylinders
+                        .get(only.index())
+                        .is_some_and(|k| same_trapezoid(c, k))
+                {
+                    return Err(bad(i, "a piece node in a compacted history"));
+                }
+            }
         }
         if let Some(i) = (1..n).find(|&i| !reached[i]) {
             return Err(bad(i, "no link reaches it"));
@@ -1043,6 +1096,141 @@ impl History {
             return Ok(());
         }
         self.complex(scene)?.validate(scene)
+    }
+
+    /// Undoes search path compaction (§4.4) on the finished history: each link `C → C′`
+    /// where `C` has several children and `C′` several parents becomes `C → P → C′` with
+    /// a dead **piece** node `P = C ∩ C′` — the split of `C` by the new walls, then the
+    /// merge of its pieces into `C′`, as two steps. Where `C` has one child (`C ⊂ C′`, a
+    /// pure merge) or `C′` one parent (`C′ ⊂ C`, a pure split) the piece would be `C′` or
+    /// `C` itself and the link stays. Coarser than the paper's process, which splits edge
+    /// by edge and deletes boundaries one at a time, adding more intermediate nodes.
+    ///
+    /// A piece stores `C′`'s record: reached from `C`, a line lies in `C ∩ C′` iff it lies
+    /// in `C′`, so a descent (`locate`, `locate_on_sheet`) tests it exactly as it tests
+    /// `C′`. Pieces get the ids just before their `C′` (links still go to younger nodes,
+    /// and each insertion's nodes stay one range); the live partition is unchanged. Later
+    /// insertions ([`History::insert`]) link as always: the history stays flagged
+    /// uncompacted.
+    fn uncompact(&mut self) -> Result<(), ComplexError> {
+        const NONE: u32 = u32::MAX;
+        let n = self.cylinders.len();
+        let broken = |node: usize| ComplexError::History {
+            node,
+            what: "a link out of range while undoing compaction",
+        };
+        // Parents per node; then, per node, the links that get a piece before it (CSR,
+        // by parent id: parents are visited in id order).
+        let mut parents = alloc::vec![0u32; n];
+        for &c in &self.links {
+            let p = parents.get_mut(c.index()).ok_or(broken(c.index()))?;
+            *p = p.saturating_add(1);
+        }
+        let pieced = |c: CylinderId, kids: usize| {
+            kids >= 2 && parents.get(c.index()).is_some_and(|&k| k >= 2)
+        };
+        let mut first = alloc::vec![0u32; n + 1];
+        for i in 0..n {
+            let kids = self.children(CylinderId(i as u32));
+            for &c in kids {
+                if pieced(c, kids.len()) {
+                    if let Some(f) = first.get_mut(c.index() + 1) {
+                        *f += 1;
+                    }
+                }
+            }
+        }
+        // Prefix sums: `first[j]` pieces go before node j, `first[j + 1] - first[j]` into it.
+        let mut sum = 0u32;
+        for f in &mut first {
+            sum = sum.saturating_add(*f);
+            *f = sum;
+        }
+        let pieces = sum as usize;
+        let total = n + pieces;
+        let links = self.links.len() + pieces;
+        self.check(self.live, total, links, self.vertices.len(), self.entries)?;
+        if u32::try_from(total).map_or(true, |t| t == NONE) {
+            return Err(ComplexError::TooLarge);
+        }
+        // New ids: the pieces into node j (by parent), then j.
+        let new_id = |j: usize| j as u32 + first.get(j + 1).copied().unwrap_or(0);
+        // `piece_of[l]`: the new id of link l's piece (NONE: none). The pieces into c are
+        // numbered from `first[c]` in parent order, just before c.
+        let mut fill = first.clone();
+        let mut piece_of = alloc::vec![NONE; self.links.len()];
+        for i in 0..n {
+            let (start, len) = self.kids.get(i).copied().unwrap_or((0, 0));
+            for l in start as usize..start as usize + len as usize {
+                let c = *self.links.get(l).ok_or(broken(i))?;
+                if !pieced(c, len as usize) {
+                    continue;
+                }
+                let k = fill.get_mut(c.index()).ok_or(broken(i))?;
+                *piece_of.get_mut(l).ok_or(broken(i))? = *k + c.0;
+                *k += 1;
+            }
+        }
+        let remap = |c: &Cylinder| Cylinder {
+            left_neighbour: c.left_neighbour.map(|k| CylinderId(new_id(k.index()))),
+            right_neighbour: c.right_neighbour.map(|k| CylinderId(new_id(k.index()))),
+            ..*c
+        };
+        let mut cylinders = Vec::new();
+        let mut alive = Vec::new();
+        let mut kids = Vec::new();
+        let mut arena = Vec::new();
+        if cylinders.try_reserve_exact(total).is_err()
+            || alive.try_reserve_exact(total).is_err()
+            || kids.try_reserve_exact(total).is_err()
+            || arena.try_reserve_exact(links).is_err()
+        {
+            return Err(ComplexError::CapacityExceeded {
+                cylinders: self.live,
+                history_nodes: total,
+                bytes: self.bytes_for(total, links, self.vertices.len(), self.entries),
+            });
+        }
+        for (j, into) in first.windows(2).enumerate() {
+            let c = remap(self.cylinders.get(j).ok_or(broken(j))?);
+            for _ in into.first().copied().unwrap_or(0)..into.last().copied().unwrap_or(0) {
+                cylinders.push(c);
+                alive.push(false);
+                kids.push((arena.len() as u32, 1));
+                arena.push(CylinderId(new_id(j)));
+            }
+            cylinders.push(c);
+            alive.push(self.alive.get(j).copied().unwrap_or(false));
+            let (start, len) = self.kids.get(j).copied().unwrap_or((0, 0));
+            kids.push((arena.len() as u32, len));
+            for l in start as usize..start as usize + len as usize {
+                let c = *self.links.get(l).ok_or(broken(j))?;
+                arena.push(match piece_of.get(l) {
+                    Some(&p) if p != NONE => CylinderId(p),
+                    _ => CylinderId(new_id(c.index())),
+                });
+            }
+        }
+        // Each insertion's range now starts with the pieces into its first node.
+        for s in &mut self.starts {
+            let j = *s as usize;
+            *s = match first.get(j) {
+                Some(&f) if j < n => *s + f,
+                _ => total as u32,
+            };
+        }
+        for list in &mut self.borders {
+            for e in list {
+                e.id = CylinderId(new_id(e.id.index()));
+            }
+        }
+        self.cylinders = cylinders;
+        self.alive = alive;
+        self.kids = kids;
+        self.links = arena;
+        self.scratch.sparse.clear();
+        self.compacted = false;
+        Ok(())
     }
 
     /// The live cylinder across `chain` on `side` in `layer` at θ⁺.
@@ -1925,6 +2113,12 @@ impl History {
             self.entries += 1;
         }
     }
+}
+
+/// Whether two cylinders have the same trapezoid and layer (walls, arcs, floor, ceiling).
+fn same_trapezoid(a: &Cylinder, b: &Cylinder) -> bool {
+    (a.floor, a.ceiling, a.bottom, a.top, a.left, a.right)
+        == (b.floor, b.ceiling, b.bottom, b.top, b.left, b.right)
 }
 
 impl Cylinder {

@@ -64,7 +64,8 @@ pub enum ComplexError {
         cylinder: usize,
     },
     /// The history DAG is malformed: a link out of range or not to a younger node (a
-    /// cycle), a node no link reaches, a live node with children or a dead one without.
+    /// cycle), a node no link reaches, a live node with children or a dead one without, a
+    /// piece node in a history flagged compacted.
     History {
         /// The node at fault.
         node: usize,

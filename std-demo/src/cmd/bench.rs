@@ -4,8 +4,11 @@
 //! * `vcx bench build [--n 16,64,256] [--method ric|sweep|both] [--seed S] [--repeat R]`:
 //!   the paper's grid scene (Fig. 20; `vcx gen grid N --seed S`) for each n: construction
 //!   seconds (best of R runs), cylinders, vertices, free bitangents, history nodes, links
-//!   and depth, and the bytes of the arenas (cylinders, vertices, history links). One JSON
-//!   object per line.
+//!   and depth, and the bytes of the arenas (cylinders, vertices, history links). For
+//!   `ric` the same history built without search path compaction (§4.4,
+//!   `BuildOptions::compaction`) side by side: `uncompacted_seconds`,
+//!   `uncompacted_history_nodes`, `_links`, `_depth`, `_bytes` (`null` for the sweep).
+//!   One JSON object per line.
 //! * `vcx bench views SCENE [--points FILE | --random K] [--seed S] [--repeat R]`: the
 //!   full 360° view from each point (screens left out, complex built once by the sweep),
 //!   or with `--depth D` the ray tree (screens kept): median microseconds per view (each
@@ -204,12 +207,27 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
             _ => &[MethodChoice::Sweep],
         };
         for &m in methods {
+            let ric = m == MethodChoice::Ric;
             let options = BuildOptions {
                 seed: a.seed,
                 ..Default::default()
             };
-            let t = time_build(&scene, m == MethodChoice::Ric, &options, a.repeat)?;
+            let t = time_build(&scene, ric, &options, a.repeat)?;
             let (c, h) = (&t.complex, t.history);
+            let uncompacted = if ric {
+                let options = BuildOptions {
+                    compaction: false,
+                    ..options
+                };
+                let u = time_build(&scene, true, &options, a.repeat)?;
+                if u.complex.cylinders() != c.cylinders() {
+                    return Err(internal("the uncompacted history's live partition differs"));
+                }
+                Some((u.best(), u.history))
+            } else {
+                None
+            };
+            let uh = uncompacted.and_then(|u| u.1);
             let line = json!({
                 "scene": "grid",
                 "n": n,
@@ -223,6 +241,11 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
                 "history_links": h.map(|h| h.links),
                 "history_depth": h.map(|h| h.depth),
                 "history_bytes": h.map(|h| history_bytes(&h)),
+                "uncompacted_seconds": uncompacted.map(|u| u.0),
+                "uncompacted_history_nodes": uh.map(|h| h.nodes),
+                "uncompacted_history_links": uh.map(|h| h.links),
+                "uncompacted_history_depth": uh.map(|h| h.depth),
+                "uncompacted_history_bytes": uh.map(|h| history_bytes(&h)),
             });
             out.push_str(&line.to_string());
             out.push('\n');

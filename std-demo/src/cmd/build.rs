@@ -1,5 +1,5 @@
-//! `vcx build SCENE.json [--stats-json]`: build the visibility complex of a scene and report
-//! its size.
+//! `vcx build SCENE.json [-o OUT.vcx] [--seed N] [--no-compaction] [--stats-json]`: build
+//! the visibility complex of a scene and report its size.
 //!
 //! The scene is loaded and validated as by `vcx check` (bad input: exit status 2). The
 //! complex is then built with the rotational sweep ([`vcx::partition::build_by_sweep`]) and
@@ -33,7 +33,18 @@
 //! * `never`: never (primary walks start without it).
 //!
 //! A history is written only with the randomized construction, whose live partition is the
-//! file's complex. The scene may itself be a `.vcx` file (its scene is rebuilt).
+//! file's complex.
+//!
+//! `--no-compaction`: build the history without search path compaction (§4.4;
+//! [`vcx::partition::BuildOptions::compaction`]): an insertion's split and merge are
+//! recorded as two steps, with a piece node between a destroyed cylinder and each new one
+//! where the destroyed one has several children and the new one several parents. The live
+//! partition (and so the complex) is the same; the summary and `--stats-json` report the
+//! uncompacted history's nodes, links and depth (`--stats-json` adds the key
+//! `"compaction": false`), and `-o` writes it with the header's compacted flag clear.
+//! With `--method sweep` (no history) it is an error (exit status 2).
+//!
+//! The scene may itself be a `.vcx` file (its scene is rebuilt).
 //!
 //! `--region X0,Y0,X1,Y1` (scene units; a closed box): the viewpoints will stay in this
 //! box, so only the cylinders a view from it can enter are kept
@@ -115,6 +126,10 @@ pub struct Args {
     /// θ = 0 and the reader replays the rest from the vertices (version 3).
     #[arg(long)]
     pub explicit_cylinders: bool,
+    /// Build the history without search path compaction (§4.4): split and merge as two
+    /// steps, to measure what compaction saves (the complex is the same).
+    #[arg(long)]
+    pub no_compaction: bool,
 }
 
 /// Parses `X0,Y0,X1,Y1` (scene units, rounded to the grid) into a box; `what` names the
@@ -213,9 +228,16 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     } else {
         Vec::new()
     };
+    if args.no_compaction && args.method == Some(Method::Sweep) {
+        return Err(Failure::bad_input(
+            "--no-compaction is about the history of the randomized construction: the \
+             rotational sweep (--method sweep) builds none",
+        ));
+    }
     let options = BuildOptions {
         seed: args.seed,
         first,
+        compaction: !args.no_compaction,
         ..Default::default()
     };
     let region = match &args.region {
@@ -270,6 +292,9 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     };
     let text = if args.stats_json {
         let mut stats = stats_json(scene.len(), &built);
+        if args.no_compaction {
+            stats["compaction"] = json!(false);
+        }
         if let Some(r) = built.complex.region() {
             let ((x0, y0), (x1, y1)) = (r.min().to_f64(), r.max().to_f64());
             stats["region"] = json!([x0, y0, x1, y1]);
@@ -337,7 +362,8 @@ pub(crate) fn encode_vcx(
 ) -> Result<Vec<u8>, Failure> {
     let options = vcx::format::EncodeOptions {
         seed: built.history.is_some().then_some(seed),
-        compacted: built.history.is_some(),
+        // The file's flag is the history's own (`History::is_compacted`) when it has one.
+        compacted: built.history.as_ref().is_some_and(|h| h.is_compacted()),
         explicit_cylinders: explicit,
     };
     let history = built.history.as_ref().filter(|_| with_history);
@@ -401,8 +427,15 @@ pub fn summary(path: &Path, objects: usize, built: &Built) -> String {
             Some(h) => {
                 let st = h.stats();
                 format!(
-                    "randomized incremental, history {} nodes, {} links, depth {}",
-                    st.nodes, st.links, st.depth
+                    "randomized incremental, history {} nodes, {} links, depth {}{}",
+                    st.nodes,
+                    st.links,
+                    st.depth,
+                    if h.is_compacted() {
+                        ""
+                    } else {
+                        ", uncompacted"
+                    }
                 )
             }
             None => "rotational sweep, no history".to_string(),
