@@ -27,7 +27,7 @@ use crate::scene::SceneRef;
 /// it falls back to the O(n³) brute force if an invariant of the partition fails), already
 /// in θ order: the stable sort below then costs one comparison per vertex and keeps the
 /// order defined here whatever the enumeration. (The angles are recomputed in the
-/// comparison rather than stored next to the vertices: an `Angle` is 80 bytes, and on
+/// comparison rather than stored next to the vertices: an `Angle` is 24 bytes, and on
 /// sorted input there are only V − 1 comparisons.)
 fn free_vertices(scene: &SceneRef<'_>) -> Vec<Vertex> {
     let mut out: Vec<Vertex> = free_bitangents(scene)

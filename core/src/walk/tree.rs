@@ -239,7 +239,7 @@ struct Tree<'a, 's, S: Storage> {
 /// object: entry split, exit split and the walk), plus one per screen along the way;
 /// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
 /// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `19 504 + 864·N` bytes on x86-64 — `N` frames, and the hops,
+/// Reused across trees. Size: `19 504 + 656·N` bytes on x86-64 — `N` frames, and the hops,
 /// the branch, the start hints of anchored walks (192 bytes) and the 1024-bit exact
 /// directions of mapped range ends for the deepest tree
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks
