@@ -590,29 +590,11 @@ impl<S: Storage> super::Complex<S> {
         layer: Layer,
         angle: &Angle,
     ) -> Option<CylinderId> {
-        let list = self.borders_ref().tiling(chain, side, layer)?;
-        let before = |w: Wall| match w {
-            Wall::Zero => true,
-            Wall::Vertex(_) => self
-                .wall_angle(scene, w)
-                .is_some_and(|l| l.cmp_angle(angle) == Ordering::Less),
-        };
-        // The last cylinder whose left wall lies before `angle` (θ = 0 lies before all).
-        let k = list.partition_point(|&id| self.cylinder(id).is_some_and(|c| before(c.left)));
-        let id = *list.get(k.checked_sub(1)?)?;
-        let c = self.cylinder(id)?;
-        let inside = match c.right {
-            Wall::Zero => true,
-            w => self
-                .wall_angle(scene, w)
-                .is_some_and(|r| angle.cmp_angle(&r) == Ordering::Less),
-        };
-        inside.then_some(id)
+        self.across_keyed(scene, chain, side, layer, &angle.keyed())
     }
 
     /// [`Complex::across`] with the angle's comparison key computed once and the walls'
     /// stored angles read by reference (an anchored walk's start climbs from here).
-    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     pub(crate) fn across_keyed(
         &self,
         scene: &SceneRef<'_>,
