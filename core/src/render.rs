@@ -213,8 +213,10 @@ impl Camera {
     /// The integer vector of the image coordinate `x` (see the module documentation).
     fn vector_at(&self, x: f64) -> (i64, i64) {
         let d = self.direction_at(x);
-        // `max`, not `libm::fmax` (a software routine): the magnitudes are never NaN.
-        let m = libm::fabs(d.0).max(libm::fabs(d.1));
+        // A comparison, not `f64::max` or `libm::fmax` (NaN handling): the magnitudes are
+        // never NaN, and equal ones are the same value.
+        let (ax, ay) = (libm::fabs(d.0), libm::fabs(d.1));
+        let m = if ax < ay { ay } else { ax };
         let k = EDGE_SCALE / m;
         (round_small_i64(d.0 * k), round_small_i64(d.1 * k))
     }
@@ -239,6 +241,7 @@ impl Camera {
     }
 
     /// Column edge `c` (`0` is the left edge of the image, `width` the right edge).
+    #[inline]
     pub fn edge(&self, c: usize) -> Edge {
         self.rounded(self.nominal_x(c.min(self.width)))
     }
@@ -271,9 +274,11 @@ impl Camera {
     fn inside<I: Interval>(&self, iv: &I, left: &Edge, right: &Edge) -> Option<Bound> {
         match iv.exact_start() {
             Some(s) => {
-                let v = s.vector();
+                // The vector is kept in `i64` (always `Some`): crosses with the edges are
+                // single widening products.
+                let v = s.vector64()?;
                 // Inside the open arc (R, L) of width < π: R → v and v → L both turn left.
-                (cross_w(right.vector, v) > 0 && cross_w(left.vector, v) < 0)
+                (cross_i(right.vector, v) > 0 && cross_i(left.vector, v) < 0)
                     .then_some(Bound::Exact(v))
             }
             None => {
@@ -293,7 +298,7 @@ impl Camera {
 /// coordinate when it is known in `f64` only.
 #[derive(Clone, Copy, Debug)]
 enum Bound {
-    Exact((i128, i128)),
+    Exact((i64, i64)),
     Approx(f64),
 }
 
@@ -311,7 +316,10 @@ impl Bound {
     #[inline]
     fn side_of(&self, e: (i64, i64), x: impl FnOnce() -> f64) -> Ordering {
         match self {
-            Bound::Exact(v) => cross_w(e, *v).cmp(&0),
+            // The sign of `cross(e, v)`, as a comparison of its two products.
+            Bound::Exact(v) => {
+                (i128::from(e.0) * i128::from(v.1)).cmp(&(i128::from(e.1) * i128::from(v.0)))
+            }
             Bound::Approx(b) => x().partial_cmp(b).unwrap_or(Ordering::Less),
         }
     }
@@ -325,13 +333,11 @@ impl Bound {
     }
 }
 
+/// `cross(u, v)` for an edge vector (≤ 2⁵⁰) and an edge or boundary vector (`i64`):
+/// below 2¹¹⁴, two widening products.
+#[inline]
 fn cross_i(u: (i64, i64), v: (i64, i64)) -> i128 {
     i128::from(u.0) * i128::from(v.1) - i128::from(u.1) * i128::from(v.0)
-}
-
-/// `cross(e, v)` for an edge vector (≤ 2⁵⁰) and a boundary vector (≤ 2⁵⁴): < 2¹⁰⁵.
-fn cross_w(e: (i64, i64), v: (i128, i128)) -> i128 {
-    i128::from(e.0) * v.1 - i128::from(e.1) * v.0
 }
 
 /// An interval of a sweep (a view or a ray tree): where it starts and what it sees.
@@ -499,7 +505,7 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
     let (mut a, mut b) = (left, camera.edge(1));
     let mut x = left.x;
     let mut piece = |col: usize, interval: usize, (a, b): (f64, f64), from: f64, to: f64| {
-        let (from, to) = (from.clamp(a, b), to.clamp(a, b));
+        let (from, to) = (clamp(from, a, b), clamp(to, a, b));
         if to > from {
             emit(Piece {
                 column: col,
@@ -544,6 +550,19 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
         a = b;
         b = camera.edge(col + 1);
         x = a.x;
+    }
+}
+
+/// `v.clamp(a, b)` for `a ≤ b` (the column's edges, in order) without `f64::clamp`'s
+/// check of the bounds: the same comparisons, in the same order.
+#[inline]
+fn clamp(v: f64, a: f64, b: f64) -> f64 {
+    if v < a {
+        a
+    } else if v > b {
+        b
+    } else {
+        v
     }
 }
 
@@ -1161,29 +1180,58 @@ impl Hits {
     /// ray still crosses every remembered entry edge (`None` otherwise): a few dot
     /// products per level.
     fn unfolded(&self, scene: &SceneRef<'_>, dir: (f64, f64), branch: &[ObjectId]) -> Option<Hit> {
-        let l = norm(dir.0, dir.1);
-        if l.is_nan() || l <= 0.0 {
+        if !self.unfolds(scene, branch) {
             return None;
         }
-        let u = (dir.0 / l, dir.1 / l);
-        let last = branch.len().checked_sub(1)?;
-        let mut first = 0.0;
+        self.unfolded_at(dir, branch.len().checked_sub(1)?)
+    }
+
+    /// Whether the remembered levels hold `branch` through mirrors: the part of
+    /// [`Hits::unfolded`] that does not depend on the ray, checked once per interval by
+    /// [`centre_hits`] while the levels stay unchanged.
+    fn unfolds(&self, scene: &SceneRef<'_>, branch: &[ObjectId]) -> bool {
+        let Some(last) = branch.len().checked_sub(1) else {
+            return false;
+        };
+        if branch.len() > self.len {
+            return false;
+        }
         for (level, (&id, lv)) in branch.iter().zip(&self.levels).enumerate() {
-            let lin = lv.lin.as_ref()?;
+            let Some(lin) = lv.lin.as_ref() else {
+                return false;
+            };
             let through = lv.optics && matches!(lv.material, Material::Mirror);
             if lv.id != id || (level < last && !through) {
-                return None;
+                return false;
             }
             if !self.same_scene {
-                let obj = scene.object(id)?;
+                let Some(obj) = scene.object(id) else {
+                    return false;
+                };
                 let poly = scene.polygon(obj);
                 if obj.material != lv.material
                     || poly.get(lv.entry.k) != Some(&lin.pa)
                     || poly.get((lv.entry.k + 1) % poly.len()) != Some(&lin.pb)
                 {
-                    return None;
+                    return false;
                 }
             }
+        }
+        true
+    }
+
+    /// The ray-dependent part of [`Hits::unfolded`] for levels `0..=last` (checked by
+    /// [`Hits::unfolds`]): whether the ray still crosses every entry edge, and the hit.
+    #[inline]
+    fn unfolded_at(&self, dir: (f64, f64), last: usize) -> Option<Hit> {
+        let l = norm(dir.0, dir.1);
+        if l.is_nan() || l <= 0.0 {
+            return None;
+        }
+        let u = (dir.0 / l, dir.1 / l);
+        let mut first = 0.0;
+        for (level, lv) in self.levels.get(..=last)?.iter().enumerate() {
+            let lin = lv.lin.as_ref()?;
             let den = dot(lin.wd, u);
             if !(den < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
                 return None;
@@ -1338,6 +1386,9 @@ pub fn centre_hits<I: Interval>(
     };
     let mut sweep = None;
     let e = camera.eye.to_f64();
+    // The interval whose branch the remembered levels unfold (`Hits::unfolds`), until the
+    // next call that may change them: its later columns take only the ray's dot products.
+    let mut unfolds = None;
     for (c, centre) in camera.centre_vectors().enumerate() {
         let k = if intervals.is_empty() {
             0
@@ -1348,7 +1399,20 @@ pub fn centre_hits<I: Interval>(
         };
         let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
         let dir = (centre.0 as f64, centre.1 as f64);
-        each(c, k, hits.along_from(scene, camera.eye, e, dir, branch));
+        let fast = match (unfolds == Some(k), branch.len().checked_sub(1)) {
+            (true, Some(last)) => hits.unfolded_at(dir, last),
+            _ => None,
+        };
+        let hit = match fast {
+            Some(hit) => Some(hit),
+            None => {
+                // As before the shortcut: `Hits::unfolded` again, then the walk.
+                let hit = hits.along_from(scene, camera.eye, e, dir, branch);
+                unfolds = hits.unfolds(scene, branch).then_some(k);
+                hit
+            }
+        };
+        each(c, k, hit);
     }
 }
 
