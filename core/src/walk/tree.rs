@@ -94,8 +94,8 @@ struct Dir {
     /// rounded): the exact direction, so that events and vertices exactly on it are
     /// classified exactly (a vertex exactly on a mapped range end is a frequent
     /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`), as its index in the
-    /// stack of exact directions ([`Stacks::exacts`]: 272 bytes each, so range ends, which
-    /// are moved around a lot, do not carry them). `None` past `Wide`'s budget.
+    /// stack of exact directions ([`Stacks::exacts`] flattened: 272 bytes each, so range
+    /// ends, which are moved around a lot, do not carry them). `None` past `Wide`'s budget.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
         allow(dead_code)
@@ -239,11 +239,11 @@ struct Tree<'a, 's, S: Storage> {
 /// object: entry split, exit split and the walk), plus one per screen along the way;
 /// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
 /// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `19 504 + 656·N` bytes on x86-64 — `N` frames, and the hops,
-/// the branch, the start hints of anchored walks (192 bytes) and the 1024-bit exact
-/// directions of mapped range ends for the deepest tree
+/// Reused across trees. Size: `2 096 + 1 200·N` bytes on x86-64 — `N` frames (656 bytes)
+/// with the 1024-bit exact directions of their mapped range ends (544 bytes, see
+/// [`Frames::Exacts`]), and the hops, the branch and the start hints of anchored walks
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks
-/// `size_of::<TreeScratch<N>>() ≤ 1.25 KiB · N + 20 KiB`).
+/// `size_of::<TreeScratch<N>>() ≤ 1.25 KiB · N + 3 KiB`).
 pub struct TreeScratch<const N: usize> {
     stacks: Stacks<heapless::Vec<Frame, N>>,
 }
@@ -260,12 +260,13 @@ const MAX_HOPS: usize = 2 * MAX_TREE_DEPTH;
 
 /// The stacks of a tree in progress: frames in `F` (fixed capacity, or a vector under
 /// `alloc`), the hops and the branch down to the top frame.
-struct Stacks<F> {
+struct Stacks<F: Frames> {
     frames: F,
     hops: heapless::Vec<Hop, MAX_HOPS>,
     branch: Branch,
-    /// The exact directions of the range ends mapped through the hops (two per hop).
-    exacts: heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
+    /// The exact directions of the range ends mapped through the hops, one [`ExactPair`]
+    /// per hop ([`Tree::map_range`]), as many as frames at most (see [`Frames::Exacts`]).
+    exacts: F::Exacts,
     /// The start cylinders last found by anchored walks ([`Tree::locate_floor`]).
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     floors: Floors,
@@ -287,12 +288,12 @@ type Floors = [Option<(ObjectId, CylinderId)>; FLOOR_HINTS];
 const FLOOR_HINTS: usize = 16;
 
 impl<F: Frames> Stacks<F> {
-    const fn new(frames: F) -> Self {
+    const fn new(frames: F, exacts: F::Exacts) -> Self {
         Stacks {
             frames,
             hops: heapless::Vec::new(),
             branch: heapless::Vec::new(),
-            exacts: heapless::Vec::new(),
+            exacts,
             #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
             floors: [None; FLOOR_HINTS],
         }
@@ -301,13 +302,84 @@ impl<F: Frames> Stacks<F> {
 
 /// A stack of frames.
 trait Frames {
+    /// The stack of exact directions that goes with it. Each entry is pushed by
+    /// [`Tree::change_eye`] right before the one frame that owns it (its `Level::exacts` is
+    /// the length below the entry) and popped with that frame, and the primary frame owns
+    /// none: the stack never holds more entries than there are frames, so a capacity of
+    /// `N` entries for `N` frames never overflows (two exact directions each: 2·`N`).
+    type Exacts: ExactStack;
     fn push(&mut self, f: Frame) -> Result<(), WalkError>;
     fn pop(&mut self);
     fn top(&mut self) -> Option<&mut Frame>;
     fn clear(&mut self);
 }
 
+/// The exact directions of the two ends of a range mapped through a hop, by the end's
+/// position in the range: `Dir::exact` indexes the stack flattened, `2·entry + end`. A
+/// slot no end points at (an end without one, or dropped by a collapse) is never read.
+type ExactPair = [(Wide, Wide); 2];
+
+/// A fresh entry of a stack of [`ExactPair`]s, and the directions below it, flattened.
+type Reserved<'e> = (&'e mut ExactPair, &'e [(Wide, Wide)]);
+
+/// A stack of [`ExactPair`]s.
+// Only mirrors and refraction push; with screens alone the stack stays empty.
+#[cfg_attr(
+    not(any(feature = "mirrors", feature = "refraction")),
+    allow(dead_code)
+)]
+trait ExactStack {
+    /// Pushes a zero entry, or [`WalkError::TreeTooDeep`] when full: the entry to fill in
+    /// place (no 544-byte temporaries on the stack) and the directions below it, flattened.
+    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError>;
+    fn truncate_to(&mut self, len: usize);
+    fn entries(&self) -> &[ExactPair];
+    /// All exact directions in order, as `Dir::exact` indexes them.
+    fn flat(&self) -> &[(Wide, Wide)] {
+        self.entries().as_flattened()
+    }
+}
+
+impl<const N: usize> ExactStack for heapless::Vec<ExactPair, N> {
+    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError> {
+        self.push(ExactPair::default())
+            .map_err(|_| WalkError::TreeTooDeep)?;
+        split_top(self)
+    }
+    fn truncate_to(&mut self, len: usize) {
+        self.truncate(len)
+    }
+    fn entries(&self) -> &[ExactPair] {
+        self
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl ExactStack for Vec<ExactPair> {
+    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError> {
+        self.push(ExactPair::default());
+        split_top(self)
+    }
+    fn truncate_to(&mut self, len: usize) {
+        self.truncate(len)
+    }
+    fn entries(&self) -> &[ExactPair] {
+        self
+    }
+}
+
+/// The top entry of `s`, and the directions below it.
+#[cfg_attr(
+    not(any(feature = "mirrors", feature = "refraction")),
+    allow(dead_code)
+)]
+fn split_top(s: &mut [ExactPair]) -> Result<Reserved<'_>, WalkError> {
+    let (top, below) = s.split_last_mut().ok_or(WalkError::Corrupt)?;
+    Ok((top, below.as_flattened()))
+}
+
 impl<const N: usize> Frames for heapless::Vec<Frame, N> {
+    type Exacts = heapless::Vec<ExactPair, N>;
     fn push(&mut self, f: Frame) -> Result<(), WalkError> {
         heapless::Vec::push(self, f).map_err(|_| WalkError::TreeTooDeep)
     }
@@ -326,6 +398,7 @@ impl<const N: usize> Frames for heapless::Vec<Frame, N> {
 // be moved and cleared on every call.
 #[cfg(feature = "alloc")]
 impl Frames for Vec<Frame> {
+    type Exacts = Vec<ExactPair>;
     fn push(&mut self, f: Frame) -> Result<(), WalkError> {
         Vec::push(self, f);
         Ok(())
@@ -345,7 +418,7 @@ impl<const N: usize> TreeScratch<N> {
     /// Empty scratch.
     pub const fn new() -> Self {
         TreeScratch {
-            stacks: Stacks::new(heapless::Vec::new()),
+            stacks: Stacks::new(heapless::Vec::new(), heapless::Vec::new()),
         }
     }
 }
@@ -684,7 +757,7 @@ fn collect<S: Storage>(
     vertices: bool,
     context: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    let mut stacks = Stacks::new(Vec::new());
+    let mut stacks = Stacks::new(Vec::new(), Vec::new());
     let mut out = Vec::new();
     let mut sink = |i: Interval<'_>| {
         out.push(TreeInterval {
@@ -762,7 +835,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     scratch.frames.clear();
     scratch.hops.clear();
     scratch.branch.clear();
-    scratch.exacts.clear();
+    scratch.exacts.truncate_to(0);
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     {
         scratch.floors = [None; FLOOR_HINTS];
@@ -944,12 +1017,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                     None => Item::Done(w.level),
                 },
                 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-                Frame::Walk(w) => match w.next_piece(self, &sc.exacts, stage, level_len)? {
+                Frame::Walk(w) => match w.next_piece(self, sc.exacts.flat(), stage, level_len)? {
                     Some(p) => Item::Piece(w.level, p),
                     None => Item::Done(w.level),
                 },
                 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-                Frame::Split(s) => match s.next_edge(self, &sc.exacts, stage, level_len) {
+                Frame::Split(s) => match s.next_edge(self, sc.exacts.flat(), stage, level_len) {
                     Some((lo, hi, b, e)) => Item::Edge(s.level, s.m, s.kind, lo, hi, b, e),
                     None => Item::Done(s.level),
                 },
@@ -964,7 +1037,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     sc.frames.pop();
                     sc.hops.truncate(level.hops);
                     sc.branch.truncate(level.branch);
-                    sc.exacts.truncate(level.exacts);
+                    sc.exacts.truncate_to(level.exacts);
                 }
             }
         }
@@ -993,7 +1066,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let here = Level {
             hops: sc.hops.len(),
             branch: sc.branch.len(),
-            exacts: sc.exacts.len(),
+            exacts: sc.exacts.entries().len(),
             ..level
         };
         match material {
@@ -2102,10 +2175,12 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`: exact if it
     /// points at an endpoint of the hop's edge (or the hit point falls on or beyond one),
     /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
-    /// only places the range end; the angular error is about 2⁻⁵² rad).
+    /// only places the range end; the angular error is about 2⁻⁵² rad), and in the latter
+    /// case its exact direction, written to `out` (at the flattened index `at`) unless past
+    /// `Wide`'s budget. `exacts`: the stack of exact directions below `out`, flattened.
     fn map_end(
         &self,
-        exacts: &mut heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
+        (exacts, out, at): (&[(Wide, Wide)], &mut (Wide, Wide), usize),
         end: &Dir,
         hop: &Hop,
     ) -> Result<Dir, WalkError> {
@@ -2180,9 +2255,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         // Kept on the stack of exact directions until the frame walking it is popped.
         let exact = match exact {
             Some(x) => {
-                let i = u16::try_from(exacts.len()).map_err(|_| WalkError::TreeTooDeep)?;
-                exacts.push(x).map_err(|_| WalkError::TreeTooDeep)?;
-                Some(i)
+                *out = x;
+                Some(u16::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
             }
             None => None,
         };
@@ -2198,19 +2272,27 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// range thinner than that can come out with both ends on one direction or crossed:
     /// it is then collapsed onto one direction, the end that points at a vertex if only
     /// one does (`split_collapsed` and `push_range_walk` take a collapsed range as the ray just
-    /// before that direction).
-    fn map_range(
+    /// before that direction). The exact directions of the mapped ends go on `exacts`, one
+    /// entry for the two, kept until the frame walking the range is popped.
+    fn map_range<E: ExactStack>(
         &self,
-        exacts: &mut heapless::Vec<(Wide, Wide), { 2 * MAX_HOPS }>,
+        exacts: &mut E,
         lo: &Dir,
         hi: &Dir,
         hop: &Hop,
         flip: bool,
     ) -> Result<(Dir, Dir), WalkError> {
+        // One entry for both ends, reserved first and dropped if neither end uses it.
+        let entry = exacts.entries().len();
+        let at = entry.checked_mul(2).ok_or(WalkError::TreeTooDeep)?;
+        let ([x0, x1], below) = exacts.reserve()?;
         let (a, b) = (
-            self.map_end(exacts, lo, hop)?,
-            self.map_end(exacts, hi, hop)?,
+            self.map_end((below, x0, at), lo, hop)?,
+            self.map_end((below, x1, at + 1), hi, hop)?,
         );
+        if a.exact.is_none() && b.exact.is_none() {
+            exacts.truncate_to(entry);
+        }
         let (a, b) = if flip { (b, a) } else { (a, b) };
         let thin = cross(lo.angle.vector(), hi.angle.vector()) == 0;
         if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
@@ -2276,7 +2358,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             ccw: level.ccw != flip,
             hops: sc.hops.len(),
             branch: sc.branch.len(),
-            exacts: sc.exacts.len(),
+            exacts: sc.exacts.entries().len(),
             ..level
         };
         let (x, y) = self.map_range(&mut sc.exacts, lo, hi, &hop, flip)?;
