@@ -250,9 +250,9 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
              hold no boundary, and one ray per column gets every such column exactly right, \
              so the casters' error at one sample is already small; the complex's exactness \
              pays at stricter errors. The complex follows only the primary pieces inside the \
-             frame's field of view (`walk::frame_tree`), but its primary walk is still \
-             the full circle, and it builds the tree by recursion per interval, allocating \
-             leaves and branches (the lock-step walk is later work).",
+             frame's field of view (`walk::frame_tree`: the lock-step walk of \
+             `frame_tree_into`, collected into a vector), its primary walk starting at the \
+             field of view.",
             notes.join("\n"),
             target_notes.join("; "),
         ),

@@ -396,7 +396,8 @@ pub(super) fn frames(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         "A ray-tree frame walks the tree over the field of view only, in lock step and \
          without allocating, as a device does (`walk::frame_tree_into` into a reused scratch \
          and buffer: `walk::ray_tree_range` without the boundary vertices, which a frame does \
-         not draw; the primary walk is still the full circle): frame / full-circle tree = {} for the \
+         not draw; the primary walk starts at the field of view, found from the objects on its \
+         first line without the history): frame / full-circle tree = {} for the \
          depth-5 scenes, per-column work included. A view frame walks the full view and adds \
          the frame's own work ({} columns: one branch followed per column in `f64`, and the \
          exact coverage): {}.",
