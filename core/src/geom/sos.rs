@@ -689,33 +689,11 @@ fn cross_angles_tie(a: &Angle, b: &Angle) -> Sign {
     first_coefficient(a.vector(), b.vector(), [ha, ta, hb, tb])
 }
 
-/// Perturbed sign of `cross(a, c − d)` for an angle `a` (as `head − tail`).
+/// Perturbed sign of `cross(a, c − d)` for an angle `a` (as `head − tail`): `c − d` as an
+/// angle, for vertices and query points (their difference fits `i64`).
 #[inline]
 fn cross_with(a: &Angle, c: Sym, d: Sym) -> Sign {
-    let v = c.minus(d);
-    #[cfg(feature = "naive-f64")]
-    let exact = super::naive::cross(a.x.into(), a.y.into(), v.0, v.1);
-    #[cfg(not(feature = "naive-f64"))]
-    let exact = match (c.x.checked_sub(d.x), c.y.checked_sub(d.y)) {
-        (Some(vx), Some(vy)) => Sign::of_i128(det64(a.x, a.y, vx, vy)),
-        _ => Sign::of_i128(i128::from(a.x) * v.1 - i128::from(a.y) * v.0),
-    };
-    if exact != Sign::Zero {
-        return exact;
-    }
-    cross_with_tie(a, c, d)
-}
-
-/// [`cross_with`] where the exact value is zero (as [`cross_tie`]).
-#[cold]
-#[inline(never)]
-fn cross_with_tie(a: &Angle, c: Sym, d: Sym) -> Sign {
-    let v = c.minus(d);
-    let [ha, ta] = a.ranks();
-    if ha == c.rank && ta == d.rank && a.vector() == v {
-        return Sign::Zero;
-    }
-    first_coefficient(a.vector(), v, [ha, ta, c.rank, d.rank])
+    cross_angles(a, &Angle::of_syms(c, d))
 }
 
 /// [`upper_half`] in `i64`.
