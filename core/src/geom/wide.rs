@@ -123,6 +123,41 @@ impl Wide {
         Some(())
     }
 
+    /// `self · k` for a magnitude of at most four limbs: its sign (−1, 0, 1) and six
+    /// little-endian limbs of its magnitude (below 2³⁸⁴, no overflow), on the stack.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
+        allow(dead_code)
+    )]
+    #[inline]
+    fn mul_short(&self, k: i128) -> (i8, [u64; 6]) {
+        let mut mag = [0u64; 6];
+        let src = self.limbs();
+        let km = k.unsigned_abs();
+        for (shift, kl) in [(0, km as u64), (1, (km >> 64) as u64)] {
+            if kl == 0 {
+                continue;
+            }
+            let mut carry = 0u64;
+            for (slot, &l) in mag.iter_mut().skip(shift).zip(src) {
+                let acc = u128::from(l) * u128::from(kl) + u128::from(*slot) + u128::from(carry);
+                *slot = acc as u64;
+                carry = (acc >> 64) as u64;
+            }
+            if let Some(slot) = mag.get_mut(src.len() + shift) {
+                *slot = carry;
+            }
+        }
+        let sign = if self.len == 0 || k == 0 {
+            0
+        } else if self.negative != (k < 0) {
+            -1
+        } else {
+            1
+        };
+        (sign, mag)
+    }
+
     /// [`Wide::mul_i128`] for a magnitude within two limbs of the budget, checked per limb.
     fn mul_near_limit(&self, neg: bool, k0: u64, k1: u64) -> Option<Wide> {
         let mut mag = [0u64; LIMBS];
@@ -238,6 +273,26 @@ impl Wide {
         allow(dead_code)
     )]
     pub(crate) fn cross_sign(u: &(Wide, Wide), v: (i128, i128)) -> Option<Sign> {
+        // The common case (a range end mapped through one hop, against a query difference):
+        // both products within six limbs, compared without forming `Wide`s.
+        if u.0.len <= 4 && u.1.len <= 4 {
+            let (p, q) = (u.0.mul_short(v.1), u.1.mul_short(v.0));
+            return Some(match p.0.cmp(&q.0) {
+                Ordering::Greater => Sign::Positive,
+                Ordering::Less => Sign::Negative,
+                Ordering::Equal if p.0 == 0 => Sign::Zero,
+                // Equal signs: the magnitudes decide, reversed for negative products.
+                Ordering::Equal => {
+                    let by_mag = p.1.iter().rev().cmp(q.1.iter().rev());
+                    let by_mag = if p.0 < 0 { by_mag.reverse() } else { by_mag };
+                    match by_mag {
+                        Ordering::Greater => Sign::Positive,
+                        Ordering::Equal => Sign::Zero,
+                        Ordering::Less => Sign::Negative,
+                    }
+                }
+            });
+        }
         let (mut p, mut q) = (Wide::default(), Wide::default());
         u.0.mul_into(v.1, &mut p)?;
         u.1.mul_into(v.0, &mut q)?;
@@ -546,6 +601,24 @@ mod tests {
                 Wide::cross_sign(&u, v),
                 plain.map(|c| c.sign()),
                 "round {round}"
+            );
+        }
+        // Zero products, and factors past 64 bits, in the short path.
+        let h = 1i128 << 100;
+        for (u, v) in [
+            ((w(0), w(5)), (3, 0)),
+            ((w(0), w(-5)), (3, 2)),
+            ((w(4), w(0)), (0, -2)),
+            ((w(0), w(0)), (1, 1)),
+            ((w(3), w(5)), (0, 0)),
+            ((w(-h), w(h)), (-h, -h)),
+            ((w(h), w(h + 1)), (h, h)),
+        ] {
+            let plain = u.0.mul_i128(v.1).and_then(|p| p.sub(&u.1.mul_i128(v.0)?));
+            assert_eq!(
+                Wide::cross_sign(&u, v),
+                plain.map(|c| c.sign()),
+                "{u:?} {v:?}"
             );
         }
     }

@@ -100,12 +100,25 @@ pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Opt
         i128::from(e.x()) - i128::from(aq.x()),
         i128::from(e.y()) - i128::from(aq.y()),
     );
-    let t = wx * dx + wy * dy;
-    let (tdx, tdy) = (t * dx, t * dy);
-    let (gx, gy) = (n * wx - tdx, n * wy - tdy);
     let (kn, kd) = (i128::from(kn), i128::from(kd));
-    let x = round_coordinate(i128::from(aq.x()), tdx, gx, n, kn, kd);
-    let y = round_coordinate(i128::from(aq.y()), tdy, gy, n, kn, kd);
+    let (x, y) = if kd == 1 && (dx == 0 || dy == 0) {
+        // An axis-parallel line with an integer factor (a mirror wall): the foot is `e`
+        // with one coordinate of `a`, and the new eye lies on the grid — the value the
+        // general rounding below gives, without its divisions (`|kn·w| < 2⁷⁵`).
+        if dy == 0 {
+            (i128::from(e.x()), i128::from(aq.y()) + kn * wy)
+        } else {
+            (i128::from(aq.x()) + kn * wx, i128::from(e.y()))
+        }
+    } else {
+        let t = wx * dx + wy * dy;
+        let (tdx, tdy) = (t * dx, t * dy);
+        let (gx, gy) = (n * wx - tdx, n * wy - tdy);
+        (
+            round_coordinate(i128::from(aq.x()), tdx, gx, n, kn, kd),
+            round_coordinate(i128::from(aq.y()), tdy, gy, n, kn, kd),
+        )
+    };
     let lim = i128::from(QUERY_MAX_ABS_RAW);
     if x.abs() > lim || y.abs() > lim {
         return None;

@@ -2234,9 +2234,36 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
         // The same exactly, scaled by |den|: `(prev − next)·den + num·d`; from an end
-        // without an exact direction (`d` itself is exact) `den` is the one above.
-        let exact = match end.exact(exacts) {
-            Some(x) => Wide::cross(x, e).and_then(|den| scaled_hit(x, &den, num, pn)),
+        // without an exact direction (`d` itself is exact) `den` is the one above. Any
+        // positive scale is the same direction: an axis-parallel edge (a hall's walls) is
+        // taken as its unit vector, which divides `den` and `num` by its length.
+        let axis = e.0 == 0 || e.1 == 0;
+        let (e1, num1) = if axis {
+            let e1 = (e.0.signum(), e.1.signum());
+            (e1, cross(diff(a, hop.prev), e1))
+        } else {
+            (e, num)
+        };
+        // Written to `out` in place (no 272-byte temporaries) and kept on the stack of exact
+        // directions until the frame walking it is popped; `false` past `Wide`'s budget.
+        let written = match end.exact(exacts) {
+            Some(x) => {
+                // `cross(x, e1)`: along an axis one coordinate of `x`, up to sign.
+                let den = match e1 {
+                    (0, s) if axis => Some(if s > 0 { x.0 } else { x.0.neg() }),
+                    (s, _) if axis => Some(if s > 0 { x.1.neg() } else { x.1 }),
+                    _ => Wide::cross(x, e1),
+                };
+                den.is_some_and(|den| scaled_hit(x, &den, num1, pn, out))
+            }
+            // Along an axis all in `i128`: |den| < 2⁶³, |pn|, |num| < 2⁵⁴, sums < 2¹¹⁸.
+            None if axis => {
+                let den1 = cross(d, e1);
+                let s = den1.signum();
+                out.0 = Wide::from_i128(s * (den1 * pn.0 + num1 * d.0));
+                out.1 = Wide::from_i128(s * (den1 * pn.1 + num1 * d.1));
+                true
+            }
             // All in `i128`: two products each, at most 2²⁵⁵ (`scaled_hit` without its
             // general loops).
             None => {
@@ -2249,16 +2276,15 @@ impl<S: Storage> Tree<'_, '_, S> {
                         h
                     }
                 };
-                Some((hit(pn.0, d.0), hit(pn.1, d.1)))
+                out.0 = hit(pn.0, d.0);
+                out.1 = hit(pn.1, d.1);
+                true
             }
         };
-        // Kept on the stack of exact directions until the frame walking it is popped.
-        let exact = match exact {
-            Some(x) => {
-                *out = x;
-                Some(u16::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
-            }
-            None => None,
+        let exact = if written {
+            Some(u16::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
+        } else {
+            None
         };
         Ok(Dir {
             angle: Angle::constant(dir),
@@ -2631,17 +2657,25 @@ fn round_away(x: f64) -> f64 {
 
 /// The hit point of [`Tree::map_end`] relative to the next eye, exactly, scaled by the
 /// denominator's magnitude: `(prev − next)·den + num·d` (the direction `d` from `prev`, `num`
-/// the numerator of the hit's parameter, `pn = prev − next`); `None` for a zero
-/// denominator or past `Wide`'s budget.
+/// the numerator of the hit's parameter, `pn = prev − next`), written to `out`; `false` (and
+/// `out` untouched) for a zero denominator or past `Wide`'s budget.
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-fn scaled_hit(d: &(Wide, Wide), den: &Wide, num: i128, pn: (i128, i128)) -> Option<(Wide, Wide)> {
-    let x = den.mul_add(pn.0, &d.0, num)?;
-    let y = den.mul_add(pn.1, &d.1, num)?;
+fn scaled_hit(
+    d: &(Wide, Wide),
+    den: &Wide,
+    num: i128,
+    pn: (i128, i128),
+    out: &mut (Wide, Wide),
+) -> bool {
+    let (Some(x), Some(y)) = (den.mul_add(pn.0, &d.0, num), den.mul_add(pn.1, &d.1, num)) else {
+        return false;
+    };
     match den.sign() {
-        Sign::Negative => Some((x.neg(), y.neg())),
-        Sign::Zero => None,
-        Sign::Positive => Some((x, y)),
+        Sign::Negative => *out = (x.neg(), y.neg()),
+        Sign::Zero => return false,
+        Sign::Positive => *out = (x, y),
     }
+    true
 }
 
 fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
