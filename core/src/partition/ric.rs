@@ -48,7 +48,9 @@
 //! ([`History::chain_up`]). The bitangents of N with each object met are computed once
 //! per insertion, grouped by the pair of chains they join (an event search reads only the
 //! group that can fit). The replacement intervals derived from the chain carry the chain
-//! indices they cover, so each chain cylinder is linked to exactly the intervals over it.
+//! indices they cover, so each chain cylinder is linked to exactly the intervals over it;
+//! where an event leaves their shapes as they were, the open intervals stay as they are
+//! (no sort, no merge with the open set).
 //! The order of N and an arc's object along the lines (one offset comparison per vertex
 //! of N) is asked only where the layer depends on it.
 //!
@@ -162,6 +164,21 @@ impl Dir {
 #[inline(always)]
 fn fast_order(a: &Dir, b: &Dir) -> Option<Ordering> {
     (a.fast && b.fast && a.key != b.key).then(|| a.key.cmp(&b.key))
+}
+
+/// Whether a candidate event direction `c` is before `best` (if any) and after θ (if
+/// any), when the keys alone decide it (the inlined common case of `next_event`).
+#[inline(always)]
+fn fast_better(c: &Dir, best: Option<&Dir>, theta: Option<&Dir>) -> Option<bool> {
+    if let Some(b) = best {
+        if fast_order(c, b)? != Ordering::Less {
+            return Some(false);
+        }
+    }
+    match theta {
+        Some(t) => Some(fast_order(c, t)? == Ordering::Greater),
+        None => Some(true),
+    }
 }
 
 /// An angle θ with its fast comparison key.
@@ -710,6 +727,7 @@ impl History {
     }
 
     /// The border-index entry of a cylinder with left wall `w`.
+    #[inline]
     fn entry(&self, w: Wall, id: CylinderId) -> Entry {
         match w {
             Wall::Zero => Entry {
@@ -1611,10 +1629,12 @@ impl History {
                 })
         };
         let vertex = |v: VertexId| self.dirs.get(v.index()).map(|&d| (d, Src::Vertex(v)));
+        let theta_dir = theta.map(|t| &t.dir);
         for &id in &s.chain {
             if let Wall::Vertex(w) = self.cylinders[id.index()].right {
                 if let Some(c) = vertex(w) {
-                    if better(c, &best) {
+                    let best_dir = best.as_ref().map(|b| &b.0 .0);
+                    if fast_better(&c.0, best_dir, theta_dir).unwrap_or_else(|| better(c, &best)) {
                         best = Some((c, Event::Wall(w)));
                     }
                 }
@@ -1635,7 +1655,14 @@ impl History {
                 for i in range {
                     let Some((b, a)) = s.pool.get(i) else { break };
                     let cand = (a.dir, Src::Pool(i));
-                    if right.as_ref().is_none_or(|r| less(&cand, r)) && better(cand, &best) {
+                    let before_right = right.as_ref().is_none_or(|r| {
+                        fast_order(&cand.0, &r.0).map_or_else(|| less(&cand, r), Ordering::is_lt)
+                    });
+                    let best_dir = best.as_ref().map(|b| &b.0 .0);
+                    if before_right
+                        && fast_better(&cand.0, best_dir, theta_dir)
+                            .unwrap_or_else(|| better(cand, &best))
+                    {
                         let event = Event::Cross {
                             bitangent: *b,
                             lower: bound == Bound::Lower,
@@ -1654,9 +1681,9 @@ impl History {
         Some((key, event))
     }
 
-    /// Moves the insertion to the chain `s.next` after an event at `wall`.
-    fn step(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
-        derive(&self.cylinders, &s.next, s.n, &mut s.rows, &mut s.derived);
+    /// Closes the replacement intervals of `s.open` that the derived intervals no longer
+    /// have and opens the new ones at `wall`, setting each derived interval's cylinder.
+    fn reopen(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
         // The derived intervals by shape (with their index, so each learns its cylinder).
         s.shapes.clear();
         s.shapes
@@ -1665,8 +1692,6 @@ impl History {
         s.shapes.sort_unstable_by_key(|e| e.0);
         s.run_id.clear();
         s.run_id.resize(s.derived.len(), CylinderId::ZERO);
-        s.closers.clear();
-        s.openers.clear();
         // Replacement intervals that changed: close those gone, open the new ones (both in
         // shape order).
         let old = core::mem::take(&mut s.open);
@@ -1714,6 +1739,25 @@ impl History {
         }
         s.open = open;
         s.spare_open = old;
+        Ok(())
+    }
+
+    /// Moves the insertion to the chain `s.next` after an event at `wall`.
+    fn step(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
+        core::mem::swap(&mut s.derived, &mut s.last_derived);
+        derive(&self.cylinders, &s.next, s.n, &mut s.rows, &mut s.derived);
+        s.closers.clear();
+        s.openers.clear();
+        // The same shapes in the same order as before the event: the same intervals stay
+        // open, each derived interval keeps its cylinder (`run_id`).
+        let same = s.derived.len() == s.last_derived.len()
+            && s.derived
+                .iter()
+                .zip(&s.last_derived)
+                .all(|(a, b)| a.0 == b.0);
+        if !same {
+            self.reopen(s, wall)?;
+        }
         // Old cylinders entering or leaving the conflict region between their walls keep
         // their geometry outside it, as new cylinders with a new wall.
         let stamp = s.next_stamp();
@@ -2160,8 +2204,10 @@ struct Old {
     first_piece: Option<CylinderId>,
     remainder: Option<CylinderId>,
     last_piece: Option<CylinderId>,
-    /// The last children recorded (to skip repeats cheaply).
-    recent: [Option<CylinderId>; 2],
+    /// The last children recorded (to skip repeats cheaply): as many as the intervals
+    /// that can cover one chain cylinder (below or above N, and an `(F, N)` and an
+    /// `(N, G)` run).
+    recent: [Option<CylinderId>; 4],
     /// Index in the current chain (valid when `generation` is the scratch's).
     pos: u32,
     generation: u32,
@@ -2182,6 +2228,8 @@ struct Scratch {
     spare_open: Vec<(Shape, CylinderId)>,
     /// The replacement intervals of the chain and the chain indices each covers.
     derived: Vec<(Shape, usize, usize)>,
+    /// Those of the chain before the current event.
+    last_derived: Vec<(Shape, usize, usize)>,
     /// [`derive`]'s copy of the chain cylinders' fields.
     rows: Vec<Row>,
     /// `(shape, index in derived)`, sorted.
@@ -2296,6 +2344,7 @@ impl Scratch {
     }
 
     /// The index in `dense` of conflict cylinder `id`, created on first sight.
+    #[inline]
     fn state_index(&mut self, id: CylinderId) -> usize {
         match self.sparse_index(id) {
             Some(&k) => k as usize,
@@ -2312,7 +2361,7 @@ impl Scratch {
                     first_piece: None,
                     remainder: None,
                     last_piece: None,
-                    recent: [None; 2],
+                    recent: [None; 4],
                     pos: 0,
                     generation: 0,
                 });
@@ -2399,7 +2448,7 @@ impl Scratch {
                 if st.recent.contains(&Some(id)) {
                     continue;
                 }
-                st.recent = [Some(id), st.recent[0]];
+                st.recent = [Some(id), st.recent[0], st.recent[1], st.recent[2]];
                 self.links.push((i as u32, id));
             }
         }
