@@ -505,6 +505,20 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
     let (mut a, mut b) = (left, camera.edge(1));
     let mut x = left.x;
     let mut piece = |col: usize, interval: usize, (a, b): (f64, f64), from: f64, to: f64| {
+        // The rest of a column from its left edge: the whole column, fraction exactly 1
+        // (what the clamps and the division below give, without them).
+        if to == f64::INFINITY && from.to_bits() == a.to_bits() {
+            if b > a {
+                emit(Piece {
+                    column: col,
+                    interval,
+                    from,
+                    to: b,
+                    fraction: 1.0,
+                });
+            }
+            return;
+        }
         let (from, to) = (clamp(from, a, b), clamp(to, a, b));
         if to > from {
             emit(Piece {
@@ -927,7 +941,9 @@ pub fn hit_along(
 ///
 /// Through mirrors only, the remembered levels are linear forms of the primary direction
 /// (the unfolded ray is straight), and a ray that still crosses every remembered edge
-/// costs a few dot products per level.
+/// costs a few dot products per level. [`centre_hits`] goes further along the columns of
+/// one interval: they turn clockwise, so of these tests only the one that fails first
+/// can fail, and a column costs that test and the two distances.
 ///
 /// The optics are taken at the hit edge's first vertex rather than at the hit point, so
 /// that they do not depend on which ray computed them: the result is [`hit_along`]'s up to
@@ -1031,6 +1047,9 @@ struct Level {
     next: (f64, f64),
     /// When every level before is a mirror: the level in terms of the primary direction.
     lin: Option<Unfolded>,
+    /// With `optics`, when this level and every level before are mirrors: the product of
+    /// their reflections (the next level's `M` in [`Unfolded`]).
+    after: Option<[[f64; 2]; 2]>,
 }
 
 /// A level reached through mirrors only, as linear forms of the unit primary direction
@@ -1108,6 +1127,7 @@ impl Level {
         exit: Side::NONE,
         next: (f64::NAN, f64::NAN),
         lin: None,
+        after: None,
     };
 }
 
@@ -1143,11 +1163,12 @@ impl Hits {
         dir: (f64, f64),
         branch: &[ObjectId],
     ) -> Option<Hit> {
-        self.along_from(scene, eye, eye.to_f64(), dir, branch)
+        self.along_from(scene, eye, eye.to_f64(), dir, branch, true)
     }
 
     /// [`Hits::along`] with `e = eye.to_f64()` (converted once per frame by
-    /// [`centre_hits`]).
+    /// [`centre_hits`]); `unfolded`: whether to try [`Hits::unfolded`] (not when the
+    /// caller knows that it fails).
     fn along_from(
         &mut self,
         scene: &SceneRef<'_>,
@@ -1155,6 +1176,7 @@ impl Hits {
         e: (f64, f64),
         dir: (f64, f64),
         branch: &[ObjectId],
+        unfolded: bool,
     ) -> Option<Hit> {
         if branch.len() > MAX_BRANCH {
             return hit_along(scene, eye, dir, branch);
@@ -1163,7 +1185,7 @@ impl Hits {
             self.eye = e;
             self.len = 0;
         }
-        if branch.len() <= self.len {
+        if unfolded && branch.len() <= self.len {
             if let Some(hit) = self.unfolded(scene, dir, branch) {
                 return Some(hit);
             }
@@ -1224,36 +1246,63 @@ impl Hits {
     /// [`Hits::unfolds`]): whether the ray still crosses every entry edge, and the hit.
     #[inline]
     fn unfolded_at(&self, dir: (f64, f64), last: usize) -> Option<Hit> {
-        let l = norm(dir.0, dir.1);
-        if l.is_nan() || l <= 0.0 {
-            return None;
-        }
-        let u = (dir.0 / l, dir.1 / l);
-        let mut first = 0.0;
-        for (level, lv) in self.levels.get(..=last)?.iter().enumerate() {
+        let u = unit_ray(dir)?;
+        for lv in self.levels.get(..=last)? {
             let lin = lv.lin.as_ref()?;
-            let den = dot(lin.wd, u);
-            if !(den < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
+            if !(dot(lin.wd, u) < 0.0 && dot(lin.qa, u) >= 0.0 && dot(lin.qb, u) <= 0.0) {
                 return None;
             }
-            // The distance only where it is output: a division per level saved.
-            if level == 0 {
-                first = (lin.num / den).max(0.0);
-            }
-            if level == last {
-                let t = if level == 0 {
-                    first
-                } else {
-                    (lin.num / den).max(0.0)
-                };
-                return Some(Hit {
-                    first,
-                    length: t,
-                    facing: libm::fabs(dot(lin.wn, u)),
-                });
+        }
+        self.unfolded_hit(u, last)
+    }
+
+    /// The hit along the unit ray `u` through the unfolded levels `0..=last` (the ray
+    /// crosses every entry edge): the distances to the first and the last entry edge.
+    #[inline]
+    fn unfolded_hit(&self, u: (f64, f64), last: usize) -> Option<Hit> {
+        let distance = |level: usize| {
+            let lin = self.levels.get(level)?.lin.as_ref()?;
+            let den = dot(lin.wd, u);
+            (den < 0.0).then(|| ((lin.num / den).max(0.0), lin))
+        };
+        let (first, lin) = distance(0)?;
+        let (length, lin) = if last == 0 {
+            (first, lin)
+        } else {
+            distance(last)?
+        };
+        Some(Hit {
+            first,
+            length,
+            facing: libm::fabs(dot(lin.wn, u)),
+        })
+    }
+
+    /// For the unit ray `u` through the unfolded levels `0..=last`: the one constraint of
+    /// [`Hits::unfolded_at`] that fails first as the ray turns clockwise (`q` with
+    /// `q·u ≥ 0` while the ray crosses every entry edge), or `None` if `u` is on or
+    /// outside one. Each constraint holds on a half-turn that ends less than π clockwise
+    /// of `u`, and the ends come in the order of the `q`s: a column right of `u` then
+    /// takes one test, not three per level ([`centre_hits`]). The edge normal's test
+    /// (`den < 0`) follows from the endpoints' (`den = cross(M·u, b − a)`) and is left
+    /// to [`Hits::unfolded_hit`] where a distance needs it.
+    fn first_to_fail(&self, u: (f64, f64), last: usize) -> Option<(f64, f64)> {
+        let mut first = (0.0, 0.0);
+        for lv in self.levels.get(..=last)? {
+            let lin = lv.lin.as_ref()?;
+            for q in [lin.qa, (-lin.qb.0, -lin.qb.1)] {
+                let p = dot(q, u);
+                if p.is_nan() || p <= 0.0 {
+                    return None;
+                }
+                // `q` counter-clockwise of `first`: its half-turn ends first, clockwise
+                // (the zero start is clockwise of every `q`).
+                if first.0 * q.1 - first.1 * q.0 >= 0.0 {
+                    first = q;
+                }
             }
         }
-        None
+        Some(first)
     }
 
     /// [`Hits::along`]: `done` counts the levels now remembered for this branch, `same`
@@ -1324,8 +1373,9 @@ impl Hits {
                 Material::Mirror if cfg!(feature = "mirrors") => {
                     if fresh {
                         lv.next = transform_eye_f64(e, lv.entry.a, nrm, -1.0);
+                        lv.after = m.map(|m| reflect(&m, nrm));
                     }
-                    m = m.map(|m| reflect(&m, nrm));
+                    m = lv.after;
                     p
                 }
                 Material::Refractive { eta } if cfg!(feature = "refraction") => {
@@ -1373,7 +1423,9 @@ impl Hits {
 /// The interval through each column's centre (as [`centre_intervals`]) and the hit along
 /// its branch (as [`hit_along`] along [`Camera::centre`], through one [`Hits`]): calls
 /// `each(column, interval, hit)` for every column from the left. Allocates nothing;
-/// O(W + log intervals) besides the hits.
+/// O(W + log intervals) besides the hits. A column of an interval whose branch unfolds
+/// through mirrors takes the one test of [`Hits`] that can fail first instead of all of
+/// them (the same hit), and a column that sees nothing takes no call.
 pub fn centre_hits<I: Interval>(
     scene: &SceneRef<'_>,
     camera: &Camera,
@@ -1387,8 +1439,10 @@ pub fn centre_hits<I: Interval>(
     let mut sweep = None;
     let e = camera.eye.to_f64();
     // The interval whose branch the remembered levels unfold (`Hits::unfolds`), until the
-    // next call that may change them: its later columns take only the ray's dot products.
-    let mut unfolds = None;
+    // next call that may change the levels, and from its second column on the constraint
+    // that fails first clockwise (`Hits::first_to_fail`): its later columns take one test
+    // and the distances.
+    let mut run: Option<(usize, Option<(f64, f64)>)> = None;
     for (c, centre) in camera.centre_vectors().enumerate() {
         let k = if intervals.is_empty() {
             0
@@ -1398,20 +1452,34 @@ pub fn centre_hits<I: Interval>(
                 .next(centre)
         };
         let branch = intervals.get(k).map_or(&[][..], |i| i.branch());
+        // A ray that sees nothing hits nothing (`hit_along` of an empty branch).
+        let Some(last) = branch.len().checked_sub(1) else {
+            each(c, k, None);
+            continue;
+        };
         let dir = (centre.0 as f64, centre.1 as f64);
-        let fast = match (unfolds == Some(k), branch.len().checked_sub(1)) {
-            (true, Some(last)) => hits.unfolded_at(dir, last),
-            _ => None,
-        };
-        let hit = match fast {
-            Some(hit) => Some(hit),
-            None => {
-                // As before the shortcut: `Hits::unfolded` again, then the walk.
-                let hit = hits.along_from(scene, camera.eye, e, dir, branch);
-                unfolds = hits.unfolds(scene, branch).then_some(k);
-                hit
+        // Whether `Hits::unfolded` is still worth trying: not after the constraint that
+        // fails first failed (or a distance's `den < 0`, which it checks too).
+        let mut unfolded = true;
+        if let Some((i, limit)) = &mut run {
+            if *i == k {
+                let fast = unit_ray(dir).and_then(|u| {
+                    let q = match limit {
+                        Some(q) => *q,
+                        None => *limit.insert(hits.first_to_fail(u, last)?),
+                    };
+                    unfolded = false;
+                    (dot(q, u) >= 0.0).then(|| hits.unfolded_hit(u, last))?
+                });
+                if fast.is_some() {
+                    each(c, k, fast);
+                    continue;
+                }
             }
-        };
+        }
+        // As before the shortcut: `Hits::unfolded`, then the walk.
+        let hit = hits.along_from(scene, camera.eye, e, dir, branch, unfolded);
+        run = hits.unfolds(scene, branch).then_some((k, None));
         each(c, k, hit);
     }
 }
@@ -1422,6 +1490,14 @@ pub fn centre_hits<I: Interval>(
 /// and level).
 fn norm(x: f64, y: f64) -> f64 {
     libm::sqrt(x * x + y * y)
+}
+
+/// The unit direction of a ray `dir` (`None` for a zero or NaN one; an infinite length
+/// gives zeros, which no unfolded level accepts).
+#[inline]
+fn unit_ray(dir: (f64, f64)) -> Option<(f64, f64)> {
+    let l = norm(dir.0, dir.1);
+    (!l.is_nan() && l > 0.0).then(|| (dir.0 / l, dir.1 / l))
 }
 
 fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
