@@ -475,6 +475,13 @@ impl Angle {
         Angle::of_syms(Sym::vertex(v), Sym::query(q))
     }
 
+    /// The direction from the vertex `v` to the query point `q`: `from_query(q, v)`
+    /// reversed, without negating (a walk leaves a cylinder at such reversed tangents).
+    #[inline]
+    pub(crate) fn to_query(v: RankedPoint, q: QueryPoint) -> Angle {
+        Angle::of_syms(Sym::query(q), Sym::vertex(v))
+    }
+
     /// A constant direction (its vector is `d` itself, exact for any components).
     #[inline]
     pub fn constant(d: Direction) -> Angle {
@@ -511,15 +518,15 @@ impl Angle {
     /// tail), else (neither perturbed, or the same point) the exact test.
     #[inline(always)]
     fn upper(&self) -> bool {
-        match self.y.cmp(&0) {
-            Ordering::Greater => true,
-            Ordering::Less => false,
-            Ordering::Equal => match (unpack_rank(self.head), unpack_rank(self.tail)) {
-                (Some(h), Some(t)) if h != t => h < t,
-                (Some(_), None) => true,
-                (None, Some(_)) => false,
-                _ => self.x > 0,
-            },
+        // The sign test alone where `y ≠ 0` (a walk keys an angle or two per event).
+        if self.y != 0 {
+            return self.y > 0;
+        }
+        match (unpack_rank(self.head), unpack_rank(self.tail)) {
+            (Some(h), Some(t)) if h != t => h < t,
+            (Some(_), None) => true,
+            (None, Some(_)) => false,
+            _ => self.x > 0,
         }
     }
 

@@ -149,27 +149,39 @@ pub fn tangents_from(
         let _ = (wk, wn);
         edge_side_tie(scene, first + k, first + next, q)
     };
+    // Vertex k is a tangent where the signs of edges k − 1 and k agree after the flip; the
+    // line lies on the lower chain if the object is on its left.
+    let bound = |sn: Sign| {
+        if sn == Sign::Positive {
+            Bound::Lower
+        } else {
+            Bound::Upper
+        }
+    };
+    // Edge 0 first and vertex 0 last, so every edge is computed once (n, not n + 1).
     let w0 = rel(0);
-    let mut sn_prev = edge(n - 1, rel(n - 1), 0, w0);
     let mut wk = w0;
+    let mut s0 = Sign::Zero;
+    let mut sn_prev = Sign::Zero;
     for k in 0..n {
         let next = if k + 1 == n { 0 } else { k + 1 };
         let wn = if next == 0 { w0 } else { rel(next) };
         let sn = edge(k, wk, next, wn);
         wk = wn;
-        let sp = sn_prev.flip();
-        sn_prev = sn;
-        if sp == sn {
-            let bound = if sn == Sign::Positive {
-                Bound::Lower
-            } else {
-                Bound::Upper
-            };
+        if k == 0 {
+            s0 = sn;
+        } else if sn_prev.flip() == sn {
             if let Some(slot) = out.get_mut(found) {
-                *slot = (first + k, bound);
+                *slot = (first + k, bound(sn));
                 found += 1;
             }
         }
+        sn_prev = sn;
+    }
+    // Vertex 0 (between edges n − 1 and 0) comes first.
+    if sn_prev.flip() == s0 {
+        out = [(first, bound(s0)), out[0]];
+        found = (found + 1).min(2);
     }
     (out, found)
 }

@@ -773,16 +773,17 @@ impl<const K: usize> Walker<K> {
             return;
         }
         // `tangent_event` by hand: through the call a view costs 1 % more.
-        let forward = Angle::from_query(self.q, ranked(scene, h));
         let a = if ahead {
-            forward.keyed()
+            Angle::from_query(self.q, ranked(scene, h)).keyed()
         } else {
-            forward.reversed().keyed()
+            Angle::to_query(ranked(scene, h), self.q).keyed()
         };
-        if a.cmp(&self.theta) == Ordering::Greater
-            && best
-                .as_ref()
-                .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
+        // Against the best exit first: most candidates lie past it, and of those before it
+        // only the ones after θ count (fewer comparisons than the other way round).
+        if best
+            .as_ref()
+            .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
+            && a.cmp(&self.theta) == Ordering::Greater
         {
             let exit = ChainExit {
                 chain,
@@ -815,10 +816,12 @@ impl<const K: usize> Walker<K> {
             return;
         };
         let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
-        if (self.full || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
-            && best
-                .as_ref()
-                .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
+        // Against the best exit first, as counter-clockwise.
+        if best
+            .as_ref()
+            .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
+            && (self.full
+                || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
         {
             let exit = ChainExit {
                 chain,
@@ -954,12 +957,11 @@ fn tangent_event(
     bound: Bound,
     chain: Chain,
 ) -> (KeyedAngle, bool) {
-    let forward = Angle::from_query(q, ranked(scene, h));
     // The line q → h lies on `bound`; its reverse on the other chain.
     if bound == chain.bound {
-        (forward.keyed(), true)
+        (Angle::from_query(q, ranked(scene, h)).keyed(), true)
     } else {
-        (forward.reversed().keyed(), false)
+        (Angle::to_query(ranked(scene, h), q).keyed(), false)
     }
 }
 
