@@ -1,6 +1,7 @@
 //! The binary complex format (`vcx::format`, `docs/format.md`) never trusts its input:
-//! arbitrary bytes, and valid files of degenerate scenes with bytes flipped, cut short and
-//! (optionally) the checksum recomputed so the structural checks are reached. Decoding
+//! arbitrary bytes, and valid files of degenerate scenes (whole, or made opaque and pruned
+//! to a box: region files) with bytes flipped, cut short and (optionally) the checksum
+//! recomputed so the structural checks are reached. Decoding
 //! must return `Ok` or `Err`, never panic, hang or allocate without bound; on `Ok` the
 //! complex passes `validate` and a trace walks it (or reports a point that is not free).
 #![no_main]
@@ -8,8 +9,8 @@
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
 use vcx::format::{self, decode, EncodeOptions};
-use vcx::partition::build_by_sweep;
-use vcx::QueryPoint;
+use vcx::partition::{build_by_sweep, Region};
+use vcx::{Material, Point, QueryPoint, Scene};
 use vcx_tests::generators::SceneSpec;
 
 #[derive(Debug, Arbitrary)]
@@ -25,9 +26,51 @@ enum Input {
         cut: Option<u16>,
         /// Recompute the checksum after the edits.
         reseal: bool,
-        /// Store every cylinder (version 1) instead of replaying them (version 3).
+        /// Store every cylinder (version 1, or 2 with a region) instead of replaying them
+        /// (version 3, or 4 with a region).
         explicit_cylinders: bool,
+        /// Prune to a box (corners in 256ths of the scene's bounding box), the scene made
+        /// opaque.
+        region: Option<[u8; 4]>,
     },
+}
+
+/// The scene with every object opaque (a region needs it).
+fn opaque(s: &Scene) -> Option<Scene> {
+    let sr = s.as_ref();
+    let polys: Vec<Vec<Point>> = sr
+        .objects()
+        .iter()
+        .map(|o| {
+            let p = sr.polygon(o);
+            (0..p.len())
+                .filter_map(|j| p.get(o.written_vertex_id(j)).copied())
+                .collect()
+        })
+        .collect();
+    Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).ok()
+}
+
+/// A box in `s`'s bounding box, its corners at `k / 256` of its sides.
+fn region_in(s: &Scene, k: [u8; 4]) -> Option<Region> {
+    let v = s.as_ref().vertices();
+    let (x0, x1) = (
+        v.iter().map(|p| p.x()).min()?,
+        v.iter().map(|p| p.x()).max()?,
+    );
+    let (y0, y1) = (
+        v.iter().map(|p| p.y()).min()?,
+        v.iter().map(|p| p.y()).max()?,
+    );
+    let at = |lo: i32, hi: i32, k: u8| {
+        (i64::from(lo) + (i64::from(hi) - i64::from(lo)) * i64::from(k) / 256) as i32
+    };
+    let (a, b) = (at(x0, x1, k[0]), at(x0, x1, k[1]));
+    let (c, d) = (at(y0, y1, k[2]), at(y0, y1, k[3]));
+    Region::new(
+        Point::from_raw(a.min(b), c.min(d))?,
+        Point::from_raw(a.max(b), c.max(d))?,
+    )
 }
 
 fn file(
@@ -36,9 +79,16 @@ fn file(
     cut: Option<u16>,
     reseal: bool,
     explicit_cylinders: bool,
+    region: Option<[u8; 4]>,
 ) -> Option<Vec<u8>> {
-    let s = scene.realize().scene().ok()?;
-    let c = build_by_sweep(&s.as_ref()).ok()?;
+    let mut s = scene.realize().scene().ok()?;
+    if region.is_some() {
+        s = opaque(&s)?;
+    }
+    let mut c = build_by_sweep(&s.as_ref()).ok()?;
+    if let Some(k) = region {
+        c = c.prune_to_region(&s.as_ref(), region_in(&s, k)?).ok()?;
+    }
     let options = EncodeOptions {
         explicit_cylinders,
         ..EncodeOptions::default()
@@ -68,7 +118,8 @@ fuzz_target!(|input: Input| {
             cut,
             reseal,
             explicit_cylinders,
-        } => match file(scene, edits, *cut, *reseal, *explicit_cylinders) {
+            region,
+        } => match file(scene, edits, *cut, *reseal, *explicit_cylinders, *region) {
             Some(b) => b,
             None => return,
         },

@@ -133,6 +133,7 @@ impl Input {
         match self.stored_for(scene) {
             Some(c) => Ok(Built {
                 complex: c.clone(),
+                whole: None,
                 history: None,
                 seconds: 0.0,
             }),

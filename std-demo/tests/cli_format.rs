@@ -249,14 +249,15 @@ fn corrupt_files_are_one_line_errors() {
     rejects(&["view", s(&p), "--at", "1,1"], &p, &["truncated"]);
     let p = write("short.vcx", &good[..3]);
     rejects(&["check", s(&p)], &p, &["3 bytes"]);
-    // An unknown version (2 is the region format of `vcx build --region`, 3 the default).
-    let mut v4 = good.clone();
-    v4[4] = 4;
-    let p = write("v4.vcx", &v4);
+    // An unknown version (2 and 4 are the region formats of `vcx build --region`, 3 the
+    // default).
+    let mut v5 = good.clone();
+    v5[4] = 5;
+    let p = write("v5.vcx", &v5);
     rejects(
         &["check", s(&p)],
         &p,
-        &["format version 4", "byte 4", "supports versions 1 to 3"],
+        &["format version 5", "byte 4", "supports versions 1 to 4"],
     );
     // A `.vcx` file that is not one.
     let p = write("json.vcx", b"{\"objects\": []}");

@@ -1,6 +1,7 @@
-//! `vcx build --region X0,Y0,X1,Y1`, run as the built binary: the pruned file holds fewer
-//! cylinders and is smaller than the whole complex stored the same way,
-//! `vcx inspect` shows its region, `vcx view` from inside the box prints exactly what the
+//! `vcx build --region X0,Y0,X1,Y1`, run as the built binary: the pruned file (version 4)
+//! keeps fewer cylinders and is the whole replayed file plus a bit per cylinder, with
+//! `--explicit-cylinders` (version 2) smaller than the whole complex stored the same way,
+//! `vcx inspect` shows its region and what it keeps, `vcx view` from inside the box prints exactly what the
 //! full file prints, from outside it fails with one `error:` line and exit status 2, as do
 //! every refused combination (history, mirrors, a malformed or empty box); `vcx bench
 //! views` draws its viewpoints in the region.
@@ -29,10 +30,48 @@ fn files() -> (PathBuf, PathBuf) {
 
 #[test]
 fn region_file_is_smaller_and_inspect_shows_it() {
-    let (full, reg) = files();
-    // Against the whole complex with every cylinder stored, as the region file stores its
-    // own (the default version 3 replays the cylinders instead, which a pruned complex
-    // cannot).
+    let (full, v4) = files();
+    // The default (version 4): the whole complex replayed, as version 3 stores it, plus
+    // the region, a vertex count and a bit per cylinder.
+    let v3 = temp_path("whole-v3.vcx");
+    ok(&["build", s(&example("grid")), "-o", s(&v3)]);
+    let (a, b) = (
+        std::fs::metadata(&v3).unwrap().len(),
+        std::fs::metadata(&v4).unwrap().len(),
+    );
+    let replayed = json(&ok(&["inspect", s(&v4), "--json"]))["parts"]["complex"]
+        ["replayed_cylinders"]
+        .as_u64()
+        .unwrap();
+    assert!(
+        b > a + replayed / 8 && b < a + replayed / 8 + 24,
+        "{b}, {a}"
+    );
+    let text = ok(&["inspect", s(&v4)]);
+    assert!(text.contains("format version 4"), "{text}");
+    assert!(text.contains("cylinders kept"), "{text}");
+    assert!(
+        text.contains("region   viewpoints in 30,30,50,50 only"),
+        "{text}"
+    );
+    // `vcx check` loads it.
+    ok(&["check", s(&v4)]);
+    let reg = temp_path("region-v2.vcx");
+    ok(&[
+        "build",
+        s(&example("grid")),
+        "--region",
+        "30,30,50,50",
+        "--explicit-cylinders",
+        "-o",
+        s(&reg),
+    ]);
+    assert_eq!(
+        json(&ok(&["inspect", s(&v4), "--json"]))["parts"]["complex"]["cylinders"],
+        json(&ok(&["inspect", s(&reg), "--json"]))["parts"]["complex"]["cylinders"],
+    );
+    // Version 2 against the whole complex with every cylinder stored, as it stores its
+    // own.
     let explicit = temp_path("explicit.vcx");
     ok(&[
         "build",

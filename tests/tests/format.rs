@@ -294,6 +294,48 @@ fn golden_bytes() {
     assert!(unhex(GOLDEN).len() * 2 < unhex(GOLDEN_V1).len());
 }
 
+/// The golden scene made opaque, pruned to the box (5, 1)–(7, 2) between its triangles,
+/// written by default (version 4: the whole complex replayed and a kept map).
+fn small_region_file() -> (Scene, Complex, Vec<u8>) {
+    let a = [pt(0, 0), pt(4, 0), pt(0, 3)];
+    let b = [pt(10, 0), pt(8, 5), pt(12, 4)];
+    let s = Scene::new([(Material::Opaque, &a[..]), (Material::Opaque, &b[..])]).unwrap();
+    let sr = s.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let r = vcx::partition::Region::new(pt(5, 1), pt(7, 2)).unwrap();
+    let p = c.prune_to_region(&sr, r).unwrap();
+    let bytes = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
+    (s, p, bytes)
+}
+
+/// The encoding of [`small_region_file`], in hex (regenerate as [`GOLDEN`]).
+const GOLDEN_V4: &str = "\
+    5643580004000400030000000200000006000000080000001b00000000000000\
+    0000000000000000000000001e0000003e000000000000000003000300008080\
+    2000008080188080500080804080802880806080802080802880800880803880\
+    8010080205010503020301050205010203010300000003000203010001010201\
+    02010200020204020003040000040004afffff1fd62f2ef2";
+
+#[test]
+fn golden_bytes_v4() {
+    let (s, p, bytes) = small_region_file();
+    let golden = unhex(GOLDEN_V4);
+    assert!(
+        bytes == golden,
+        "the encoding of version 4 changed ({} bytes); got\n{}",
+        bytes.len(),
+        hex_lines(&bytes)
+    );
+    let loaded = decode(&golden).unwrap();
+    assert_eq!(loaded.header.version, format::VERSION_PRUNED);
+    assert_eq!(loaded.complex.region(), p.region());
+    assert_eq!(loaded.complex.vertices(), p.vertices());
+    assert_eq!(loaded.complex.cylinders(), p.cylinders());
+    assert_eq!(loaded.scene.as_ref().vertices(), s.as_ref().vertices());
+    // Fewer kept than the whole complex's 31 cylinders.
+    assert!(loaded.header.cylinders < 31, "{}", loaded.header.cylinders);
+}
+
 #[test]
 fn header_layout() {
     let (s, c, bytes) = small_file();
@@ -724,19 +766,24 @@ fn inflated_counts(bytes: Vec<u8>) {
 fn unknown_version_flags_and_parts() {
     let (_, _, bytes) = small_file();
     let mut b = bytes.clone();
-    // Version 2 is the region format (tests/tests/region.rs), 3 the replayed one; 4 is
-    // unknown.
-    b[4..6].copy_from_slice(&4u16.to_le_bytes());
+    // Version 2 is the region format (tests/tests/region.rs), 3 the replayed one, 4 the
+    // replayed region format; 5 is unknown.
+    b[4..6].copy_from_slice(&5u16.to_le_bytes());
     reseal(&mut b);
     let e = decode(&b).unwrap_err();
     assert_eq!(
         e,
         FormatError::UnsupportedVersion {
-            found: 4,
-            supported: format::VERSION_REPLAY
+            found: 5,
+            supported: format::VERSION_PRUNED
         }
     );
-    assert!(e.to_string().contains("version 4"), "{e}");
+    assert!(e.to_string().contains("version 5"), "{e}");
+    // Version 4 without its region flag.
+    let mut b = bytes.clone();
+    b[4..6].copy_from_slice(&4u16.to_le_bytes());
+    reseal(&mut b);
+    assert_eq!(decode(&b).unwrap_err(), FormatError::RegionFlagMissing);
     // The same bytes read as version 1: the complex part is too short for its cylinders.
     let mut b = bytes.clone();
     b[4..6].copy_from_slice(&1u16.to_le_bytes());

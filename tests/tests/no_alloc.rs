@@ -721,3 +721,59 @@ fn tree_scratch_is_bounded() {
         );
     }
 }
+
+/// A region file (format version 4) decodes into caller storage of exactly the kept
+/// counts, without allocating: the streaming replay keeps only the kept cylinders and
+/// vertices, with the open cylinders in `Scratch::open`.
+#[test]
+fn region_file_decodes_into_kept_storage_without_allocating() {
+    use vcx::format::{decode, decode_into, Header, SceneObject, Scratch};
+    use vcx::format::{BLANK_CYLINDER, BLANK_VERTEX};
+    use vcx::partition::Region;
+    let _g = lock();
+    let f = generate(SceneKind::Grid, 32, 3).expect("grid");
+    let s = f.scene.as_ref();
+    let whole = build_by_sweep(&s).expect("build");
+    let at = |x: i32, y: i32| vcx::Point::from_raw(x << 16, y << 16).expect("point");
+    let region = Region::new(at(15, 15), at(25, 25)).expect("box");
+    let bytes =
+        vcx::format::encode_region(&s, &whole, region, &EncodeOptions::default()).expect("encode");
+    let h = Header::read(&bytes).expect("header");
+    assert!((h.cylinders as usize) < whole.cylinders().len());
+    let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
+    let mut objects = vec![SceneObject::BLANK; n];
+    let mut points = vec![vcx::Point::default(); nv];
+    let mut open = vec![[None; 2]; Scratch::open_len(n)];
+    let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
+    let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
+    let (k, counts) = allocations(|| {
+        decode_into::<512, 64>(
+            &bytes,
+            Scratch {
+                objects: &mut objects,
+                points: &mut points,
+                open: &mut open,
+            },
+            &mut vertices,
+            &mut cylinders,
+        )
+        .map(|d| (d.vertices.len(), d.cylinders.len(), d.region))
+    });
+    assert_eq!(k, 0, "decode_into of a version-4 file allocated");
+    let loaded = decode(&bytes).expect("decode");
+    assert_eq!(
+        counts,
+        Ok((
+            loaded.complex.vertices().len(),
+            loaded.complex.cylinders().len(),
+            Some(region)
+        ))
+    );
+    assert_eq!(vertices, loaded.complex.vertices());
+    assert_eq!(cylinders, loaded.complex.cylinders());
+    println!(
+        "open slots: {} entries of {} bytes",
+        Scratch::open_len(n),
+        size_of::<vcx::partition::Slots>()
+    );
+}

@@ -3,14 +3,18 @@
 //! the pruned complex equal the full complex's and the exact reference's, on random grid
 //! scenes and random boxes and on the degenerate scenes of the fuzz generators; outside
 //! the box they are a typed error; a walk that meets a missing link stops with an error;
-//! the version-2 file round-trips (both decoders) and its corrupt variants are typed
-//! errors, never panics.
+//! the region files (version 4: the whole complex replayed and a kept map; version 2: the
+//! kept cylinders stored) round-trip (both decoders), version 4 decodes to the pruned
+//! complex of version 3, and their corrupt variants are typed errors, never panics.
 
 mod common;
 
+use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use vcx::format::{self, decode, decode_into, encode, EncodeOptions, FormatError, Header};
+use vcx::format::{
+    self, decode, decode_into, encode, encode_region, EncodeOptions, FormatError, Header,
+};
 use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
 use vcx::partition::{
     build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError, Slices,
@@ -382,29 +386,49 @@ fn a_missing_cylinder_stops_the_walk() {
     assert!(failed > 0, "no walk needed the dropped cylinder");
 }
 
-/// Encoded as version 2 with the region; both decoders give it back, and the allocation-
-/// free one walks the same views once told the region.
+/// Encoded as version 4 (default) or 2 (`explicit_cylinders`) with the region; both
+/// decoders give it back, and the allocation-free one walks the same views once told the
+/// region.
 #[test]
 fn region_files_round_trip() {
-    let (s, c, p, r) = pruned_grid(32);
-    let sr = s.as_ref();
-    let bytes = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
-    // Smaller than the whole complex stored the same way (every cylinder: version 1; the
-    // default version 3 replays the cylinders, which a pruned complex cannot).
     let explicit = EncodeOptions {
         explicit_cylinders: true,
         ..Default::default()
     };
-    let full = encode(&sr, &c, None, &explicit).unwrap();
-    assert!(bytes.len() < full.len());
+    let (s, c, p, r) = pruned_grid(32);
+    let sr = s.as_ref();
+    let v3 = encode(&sr, &c, None, &EncodeOptions::default()).unwrap();
+    let v4 = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
+    let v2 = encode(&sr, &p, None, &explicit).unwrap();
+    // Version 4 is version 3 with the region, the vertex count and one bit per cylinder.
+    let bitmap = c.cylinders().len().div_ceil(8);
+    assert!(v4.len() > v3.len() + bitmap && v4.len() < v3.len() + bitmap + 24);
+    assert_eq!(u16::from_le_bytes([v4[4], v4[5]]), format::VERSION_PRUNED);
+    // From the whole complex directly: the same file (it is the sweep's).
     assert_eq!(
-        u16::from_le_bytes([bytes[4], bytes[5]]),
-        format::VERSION_REGION
+        encode_region(&sr, &c, r, &EncodeOptions::default()).unwrap(),
+        v4
     );
+    for bytes in [v4, v2] {
+        region_file_round_trips(&s, &c, &p, r, &bytes);
+    }
+}
+
+fn region_file_round_trips(s: &Scene, c: &Complex, p: &Complex, r: Region, bytes: &[u8]) {
+    let sr = s.as_ref();
+    let bytes = bytes.to_vec();
+    // Smaller than the whole complex stored with every cylinder (version 1).
+    let explicit = EncodeOptions {
+        explicit_cylinders: true,
+        ..Default::default()
+    };
+    let full = encode(&sr, c, None, &explicit).unwrap();
+    assert!(bytes.len() < full.len());
     assert_eq!(u16::from_le_bytes([full[4], full[5]]), format::VERSION);
     let h = Header::read(&bytes).unwrap();
     assert!(h.region && !h.has_history());
     assert_eq!(h.cylinders as usize, p.cylinders().len());
+    assert_eq!(h.complex_vertices as usize, p.vertices().len());
     let loaded = decode(&bytes).unwrap();
     assert_eq!(loaded.complex.region(), Some(r));
     assert_eq!(loaded.complex.cylinders(), p.cylinders());
@@ -434,7 +458,7 @@ fn region_files_round_trip() {
                 .iter()
                 .map(|i| (i.start.vector(), i.object, i.start_vertex))
                 .collect();
-            assert_eq!(Ok(got), view_key(&c, &sr, q));
+            assert_eq!(Ok(got), view_key(c, &sr, q));
             walked += 1;
         }
         assert!(walked > 10);
@@ -522,7 +546,18 @@ fn corrupt_region_files() {
     let (x0, y0, x1, y1) = bbox(&sr);
     let r = region(x0, y0, (x0 + x1) / 2, (y0 + y1) / 2);
     let p = c.prune_to_region(&sr, r).unwrap();
-    let bytes = encode(&sr, &p, None, &EncodeOptions::default()).unwrap();
+    for explicit_cylinders in [false, true] {
+        let options = EncodeOptions {
+            explicit_cylinders,
+            ..Default::default()
+        };
+        let bytes = encode(&sr, &p, None, &options).unwrap();
+        corrupt_region_file(&bytes, &p, (x0, y0));
+    }
+}
+
+fn corrupt_region_file(bytes: &[u8], p: &Complex, (x0, y0): (i32, i32)) {
+    let bytes = bytes.to_vec();
     assert_eq!(decode(&bytes).unwrap().complex.cylinders(), p.cylinders());
     let q = QueryPoint::from_raw((i64::from(x0) << 16) + 3, (i64::from(y0) << 16) + 5).unwrap();
     for len in 0..bytes.len() {
@@ -647,6 +682,212 @@ fn tightness_table() {
                 p.cylinders().len(),
                 100.0 * (p.cylinders().len() as f64 / walked as f64 - 1.0)
             );
+        }
+    }
+}
+
+/// Decode of a version-4 file, in both decoders, against `prune_to_region` of the version-3
+/// decode of the same whole complex: field for field, same numbering.
+fn v4_equals_pruned_v3(sr: &SceneRef<'_>, c: &Complex, r: Region) {
+    let v3 = encode(sr, c, None, &EncodeOptions::default()).unwrap();
+    let expected = decode(&v3).unwrap().complex.prune_to_region(sr, r).unwrap();
+    let v4 = encode_region(sr, c, r, &EncodeOptions::default()).unwrap();
+    let h = Header::read(&v4).unwrap();
+    assert_eq!(h.version, format::VERSION_PRUNED);
+    let got = decode(&v4).unwrap().complex;
+    assert_eq!(got.region(), Some(r));
+    assert_eq!(got.vertices(), expected.vertices());
+    assert_eq!(got.cylinders(), expected.cylinders());
+    // The allocation-free decoder, in storage of exactly the kept counts.
+    let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
+    let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
+    let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
+    let d = decode_into::<4096, 512>(
+        &v4,
+        Scratch {
+            objects: &mut vec![SceneObject::BLANK; n],
+            points: &mut vec![Point::default(); nv],
+            open: &mut vec![[None; 2]; Scratch::open_len(n)],
+        },
+        &mut vertices,
+        &mut cylinders,
+    )
+    .unwrap();
+    assert_eq!(d.region, Some(r));
+    assert_eq!(d.vertices, expected.vertices());
+    assert_eq!(d.cylinders, expected.cylinders());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48 * scale() as u32))]
+    /// Random grid scenes built by the randomized construction (numbered unlike the
+    /// replay) and random boxes.
+    #[test]
+    fn v4_decodes_to_the_pruned_v3(n in 1u32..40, seed in any::<u64>(), boxes in any::<u64>()) {
+        let f = generate(SceneKind::Grid, n, seed % 1000).unwrap();
+        let sr = f.scene.as_ref();
+        let c = vcx::partition::History::build(&sr, &Default::default())
+            .unwrap()
+            .complex(&sr)
+            .unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(boxes);
+        for _ in 0..3 {
+            v4_equals_pruned_v3(&sr, &c, random_box(&sr, &mut rng));
+        }
+    }
+}
+
+/// The degenerate scenes of the fuzz generators, made opaque, in version 4.
+#[test]
+fn v4_of_degenerate_scenes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let mut done = 0;
+    for _ in 0..600 * scale() {
+        let Some(s) = common::random_spec_scene(&mut rng) else {
+            continue;
+        };
+        let sr = s.as_ref();
+        let polys: Vec<Vec<Point>> = sr
+            .objects()
+            .iter()
+            .map(|o| {
+                let p = sr.polygon(o);
+                (0..p.len()).map(|j| p[o.written_vertex_id(j)]).collect()
+            })
+            .collect();
+        let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+        let sr = s.as_ref();
+        if sr.is_empty() {
+            continue;
+        }
+        let c = build_by_sweep(&sr).unwrap();
+        for _ in 0..2 {
+            v4_equals_pruned_v3(&sr, &c, random_box(&sr, &mut rng));
+        }
+        done += 1;
+        if done == 60 * scale() {
+            break;
+        }
+    }
+    assert!(done >= 30, "only {done} degenerate scenes");
+}
+
+/// Views walked in a decoded version-4 file equal the exact reference's for the scene as
+/// read from its JSON file, from viewpoints in the box.
+#[test]
+fn v4_views_equal_the_json_scene() {
+    let f = generate(SceneKind::Grid, 24, 7).unwrap();
+    let json = f.to_json();
+    let s = vcx_demo::scene_file::parse(&json).unwrap().scene;
+    let sr = s.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let sub = SubScene::new(sr, (0..sr.len() as u32).map(ObjectId));
+    let mut compared = 0;
+    for _ in 0..4 {
+        let r = random_box(&sr, &mut rng);
+        let v4 = encode_region(&sr, &c, r, &EncodeOptions::default()).unwrap();
+        let loaded = decode(&v4).unwrap();
+        let (ls, lc) = (loaded.scene.as_ref(), &loaded.complex);
+        for q in points_in(&r, 8, &mut rng) {
+            if view(lc, &ls, q).is_err() {
+                continue;
+            }
+            compare_view(&sr, &sub, lc, q).unwrap_or_else(|e| panic!("box {r:?}: {e}"));
+            compared += 1;
+        }
+    }
+    assert!(compared > 10, "only {compared}");
+}
+
+/// A version-4 kept map of the wrong length, with bits past the end, or keeping a count
+/// other than the header's: typed errors naming the map.
+#[test]
+fn wrong_kept_maps_are_named() {
+    let f = generate(SceneKind::Grid, 4, 3).unwrap();
+    let sr = f.scene.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let (x0, y0, x1, y1) = bbox(&sr);
+    let r = region(x0, y0, (x0 + x1) / 2, (y0 + y1) / 2);
+    let bytes = encode_region(&sr, &c, r, &EncodeOptions::default()).unwrap();
+    let h = Header::read(&bytes).unwrap();
+    let replayed = c.cylinders().len();
+    let len = replayed.div_ceil(8);
+    let end = bytes.len() - format::CHECKSUM_LEN;
+    let map_at = end - len;
+    assert_eq!(bytes[map_at - 1] as usize, len, "the map's length prefix");
+    // One bit more: the count of kept cylinders is wrong.
+    let free_bit = (0..replayed)
+        .find(|&i| bytes[map_at + i / 8] & (1 << (i % 8)) == 0)
+        .unwrap();
+    let mut b = bytes.clone();
+    b[map_at + free_bit / 8] |= 1 << (free_bit % 8);
+    reseal(&mut b);
+    assert!(matches!(
+        decode(&b).unwrap_err(),
+        FormatError::Count {
+            field: "cylinders",
+            ..
+        }
+    ));
+    // A padding bit set.
+    if !replayed.is_multiple_of(8) {
+        let mut b = bytes.clone();
+        b[end - 1] |= 0x80;
+        reseal(&mut b);
+        let e = decode(&b).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FormatError::Element {
+                    arena: format::Arena::KeptMap,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+    }
+    // A map one byte short (the part shrunk with it) or one byte long.
+    for grow in [-1i64, 1] {
+        let mut b = bytes[..end].to_vec();
+        if grow < 0 {
+            b.pop();
+        } else {
+            b.push(0);
+        }
+        b[map_at - 1] = (len as i64 + grow) as u8;
+        let cb = (h.complex_bytes as i64 + grow) as u32;
+        b[format::offset::COMPLEX_BYTES..format::offset::COMPLEX_BYTES + 4]
+            .copy_from_slice(&cb.to_le_bytes());
+        b.extend_from_slice(&[0; 4]);
+        reseal(&mut b);
+        let e = decode(&b).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FormatError::Element {
+                    arena: format::Arena::KeptMap,
+                    field: "length",
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+    }
+    // A bit moved from a kept cylinder to a dropped one: an error at load (the replay
+    // keeps a vertex count other than the header's, or the pruned checks refuse it) or a
+    // complex whose walks end in a view or an error.
+    let kept_bit = (0..replayed)
+        .find(|&i| bytes[map_at + i / 8] & (1 << (i % 8)) != 0)
+        .unwrap();
+    let mut b = bytes.clone();
+    b[map_at + kept_bit / 8] &= !(1 << (kept_bit % 8));
+    b[map_at + free_bit / 8] |= 1 << (free_bit % 8);
+    reseal(&mut b);
+    if let Ok(l) = decode(&b) {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        for q in points_in(&r, 8, &mut rng) {
+            let _ = view(&l.complex, &l.scene.as_ref(), q);
         }
     }
 }

@@ -12,7 +12,8 @@ use crate::geom::sos::Angle;
 use crate::geom::Point;
 use crate::line_space::{tangency, Bitangent, Bound, Chain};
 use crate::partition::{
-    open_slots, replay, Cylinder, CylinderId, Region, ReplayError, Slots, Vertex, VertexId, Wall,
+    open_slots, replay, replay_stream, Cylinder, CylinderId, Region, ReplayError, Slots, Stream,
+    Vertex, VertexId, Wall,
 };
 use crate::scene::{Eta, FixedScene, Material, ObjectId, SceneRef};
 
@@ -56,13 +57,13 @@ pub struct Scratch<'a> {
     pub objects: &'a mut [SceneObject],
     /// At least `header.scene_vertices` entries.
     pub points: &'a mut [Point],
-    /// The open cylinders while a version-3 file's cylinders are replayed: at least
+    /// The open cylinders while a version-3 or 4 file's cylinders are replayed: at least
     /// [`Scratch::open_len`]`(header.objects)` entries (may be empty for versions 1 and 2).
     pub open: &'a mut [Slots],
 }
 
 impl Scratch<'_> {
-    /// Entries of [`Scratch::open`] a version-3 file of `objects` objects needs.
+    /// Entries of [`Scratch::open`] a version-3 or 4 file of `objects` objects needs.
     pub const fn open_len(objects: usize) -> usize {
         open_slots(objects)
     }
@@ -80,7 +81,7 @@ pub struct Decoded<'a, const V: usize, const O: usize> {
     pub vertices: &'a [Vertex],
     /// The cylinders.
     pub cylinders: &'a [Cylinder],
-    /// The region the complex is pruned to (version 2), if any: pass it to
+    /// The region the complex is pruned to (versions 2 and 4), if any: pass it to
     /// [`Complex::with_region`](crate::partition::Complex::with_region) so walks from
     /// outside it fail instead of reaching missing cylinders.
     pub region: Option<Region>,
@@ -346,55 +347,64 @@ fn read_vertices(
     vertices: &mut [Vertex],
     sorted: bool,
 ) -> Result<(), FormatError> {
-    let points = scene.vertices().len();
     let mut previous: Option<Angle> = None;
     for (i, slot) in vertices.iter_mut().enumerate() {
-        let first_at = r.pos;
-        let first = r.id(a, i, "first", points)?;
-        let second_at = r.pos;
-        let second = r.id(a, i, "second", points)?;
-        let element = |field, offset, problem| FormatError::Element {
-            arena: a,
-            index: i,
-            field,
-            offset,
-            problem,
-        };
-        // In range, so both have an object.
-        let (Some(p), Some(q)) = (object_of(scene, first), object_of(scene, second)) else {
-            return Err(element("first", first_at, Problem::NotTangent));
-        };
-        if p == q {
-            return Err(element("second", second_at, Problem::SameObject));
-        }
-        let first_bound = tangency(scene, p, first, second).ok_or(element(
-            "first",
-            first_at,
-            Problem::NotTangent,
-        ))?;
-        let second_bound = tangency(scene, q, second, first).map(flip).ok_or(element(
-            "second",
-            second_at,
-            Problem::NotTangent,
-        ))?;
-        let bitangent = Bitangent {
-            first_object: p,
-            first,
-            first_bound,
-            second_object: q,
-            second,
-            second_bound,
-        };
-        if sorted {
-            let angle = bitangent.angle(scene);
-            if previous.is_some_and(|prev| prev.cmp_angle(&angle) != Ordering::Less) {
-                return Err(element("first", first_at, Problem::NotSorted));
-            }
-            previous = Some(angle);
-        }
-        *slot = Vertex { bitangent };
+        *slot = read_vertex(r, a, scene, i, sorted.then_some(&mut previous))?;
     }
     Ok(())
+}
+
+/// Reads vertex `i` of [`read_vertices`]; with `previous` (the angle of the vertex before,
+/// updated), θ must increase strictly.
+fn read_vertex(
+    r: &mut Reader<'_>,
+    a: Arena,
+    scene: &SceneRef<'_>,
+    i: usize,
+    previous: Option<&mut Option<Angle>>,
+) -> Result<Vertex, FormatError> {
+    let points = scene.vertices().len();
+    let first_at = r.pos;
+    let first = r.id(a, i, "first", points)?;
+    let second_at = r.pos;
+    let second = r.id(a, i, "second", points)?;
+    let element = |field, offset, problem| FormatError::Element {
+        arena: a,
+        index: i,
+        field,
+        offset,
+        problem,
+    };
+    // In range, so both have an object.
+    let (Some(p), Some(q)) = (object_of(scene, first), object_of(scene, second)) else {
+        return Err(element("first", first_at, Problem::NotTangent));
+    };
+    if p == q {
+        return Err(element("second", second_at, Problem::SameObject));
+    }
+    let first_bound =
+        tangency(scene, p, first, second).ok_or(element("first", first_at, Problem::NotTangent))?;
+    let second_bound = tangency(scene, q, second, first).map(flip).ok_or(element(
+        "second",
+        second_at,
+        Problem::NotTangent,
+    ))?;
+    let bitangent = Bitangent {
+        first_object: p,
+        first,
+        first_bound,
+        second_object: q,
+        second,
+        second_bound,
+    };
+    if let Some(previous) = previous {
+        let angle = bitangent.angle(scene);
+        if previous.is_some_and(|prev| prev.cmp_angle(&angle) != Ordering::Less) {
+            return Err(element("first", first_at, Problem::NotSorted));
+        }
+        *previous = Some(angle);
+    }
+    Ok(Vertex { bitangent })
 }
 
 /// An object id as read (in range).
@@ -514,6 +524,10 @@ fn decode_complex(
     } else {
         None
     };
+    if h.has_kept_map() {
+        decode_pruned(bytes, h, *scene, r, vertices, cylinders, open)?;
+        return Ok(region);
+    }
     let start = r.pos;
     read_vertices(&mut r, Arena::Vertex, scene, vertices, true)?;
     if !h.replays_cylinders() {
@@ -530,55 +544,256 @@ fn decode_complex(
         cylinders.get_mut(..initial).unwrap_or_default(),
     )?;
     r.finish(Part::Complex)?;
-    replay(scene.len(), vertices, initial, cylinders, open).map_err(|e| {
-        // Name the stored element at fault: the cylinder at θ = 0, or the vertex that
-        // opened (or failed to close) the cylinder.
-        let stored = |i: usize| i < initial;
-        let (arena, index, why) = match e {
-            ReplayError::Lost(v) => (
-                Arena::Vertex,
-                v,
-                "a corner face it closes has no open cylinder",
-            ),
-            ReplayError::Crowded(i) if stored(i) => (
-                Arena::Cylinder,
-                i,
-                "a third cylinder at θ = 0 on its bottom or top chain",
-            ),
-            ReplayError::Crowded(i) => (
-                Arena::Vertex,
-                (i - initial) / 3,
-                "it opens a third cylinder on one chain",
-            ),
-            ReplayError::Unmatched(i) if stored(i) => (
-                Arena::Cylinder,
-                i,
-                "not continued by exactly one cylinder open at θ = 2π",
-            ),
-            ReplayError::Unmatched(i) => (
-                Arena::Vertex,
-                (i - initial) / 3,
-                "a cylinder it opens continues into no cylinder at θ = 0",
-            ),
-            ReplayError::Storage => (Arena::Cylinder, 0, "storage too small"),
-        };
-        let skip = match arena {
-            Arena::Vertex => 2 * index,
-            _ => 2 * nv + 4 * index,
-        };
-        FormatError::Element {
-            arena,
-            index,
-            field: if arena == Arena::Vertex {
-                "first"
-            } else {
-                "floor"
-            },
-            offset: varint_offset(bytes, start, skip),
-            problem: Problem::Replay(why),
-        }
-    })?;
+    replay(scene.len(), vertices, initial, cylinders, open)
+        .map_err(|e| replay_error(bytes, start, nv, initial, e))?;
     Ok(region)
+}
+
+/// A replay failure as the stored element at fault: the cylinder at θ = 0, or the vertex
+/// that opened (or failed to close) the cylinder. `start`: the first vertex's offset,
+/// `nv`: the stored vertices.
+fn replay_error(
+    bytes: &[u8],
+    start: usize,
+    nv: usize,
+    initial: usize,
+    e: ReplayError,
+) -> FormatError {
+    let stored = |i: usize| i < initial;
+    let (arena, index, why) = match e {
+        ReplayError::Lost(v) => (
+            Arena::Vertex,
+            v,
+            "a corner face it closes has no open cylinder",
+        ),
+        ReplayError::Crowded(i) if stored(i) => (
+            Arena::Cylinder,
+            i,
+            "a third cylinder at θ = 0 on its bottom or top chain",
+        ),
+        ReplayError::Crowded(i) => (
+            Arena::Vertex,
+            (i - initial) / 3,
+            "it opens a third cylinder on one chain",
+        ),
+        ReplayError::Unmatched(i) if stored(i) => (
+            Arena::Cylinder,
+            i,
+            "not continued by exactly one cylinder open at θ = 2π",
+        ),
+        ReplayError::Unmatched(i) => (
+            Arena::Vertex,
+            (i - initial) / 3,
+            "a cylinder it opens continues into no cylinder at θ = 0",
+        ),
+        ReplayError::Storage | ReplayError::Input => (Arena::Cylinder, 0, "storage too small"),
+    };
+    let skip = match arena {
+        Arena::Vertex => index.saturating_mul(2),
+        _ => nv.saturating_mul(2).saturating_add(index.saturating_mul(4)),
+    };
+    FormatError::Element {
+        arena,
+        index,
+        field: if arena == Arena::Vertex {
+            "first"
+        } else {
+            "floor"
+        },
+        offset: varint_offset(bytes, start, skip),
+        problem: Problem::Replay(why),
+    }
+}
+
+/// The rest of a version-4 complex part after the region (`docs/format.md`, "Version
+/// 4"): the count of all vertices, the vertices, the cylinders at θ = 0 and the kept map,
+/// replayed streaming into the kept arenas `vertices` and `cylinders` (the header's
+/// counts): the storage is theirs and `open`'s, never the whole complex's.
+fn decode_pruned(
+    bytes: &[u8],
+    h: &Header,
+    scene: SceneRef<'_>,
+    mut r: Reader<'_>,
+    vertices: &mut [Vertex],
+    cylinders: &mut [Cylinder],
+    open: &mut [Slots],
+) -> Result<(), FormatError> {
+    let n = scene.len();
+    let initial = h.stored_cylinders() as usize;
+    capacity(Arena::OpenSlot, open_slots(n) as u32, open.len())?;
+    let (all, at) = r.field::<u32>(Arena::Vertex, 0, "count")?;
+    let count = |problem| FormatError::Count {
+        field: "all_vertices",
+        offset: at,
+        count: u64::from(all),
+        problem,
+    };
+    // Against the part before anything is read: what is left must hold all vertices, the
+    // cylinders at θ = 0 and the kept map's length.
+    let left = r.end.saturating_sub(r.pos) as u64;
+    let needed = u64::from(all) * super::MIN_VERTEX_BYTES
+        + initial as u64 * super::MIN_INITIAL_CYLINDER_BYTES
+        + 1;
+    if needed > left {
+        return Err(count(CountProblem::ExceedsPart {
+            min_bytes: needed,
+            part_bytes: left,
+        }));
+    }
+    let all = all as usize;
+    if all < vertices.len() {
+        return Err(count(CountProblem::Inconsistent));
+    }
+    let start = r.pos;
+    // Find the cylinders at θ = 0 and the kept map past the vertices (read again, and
+    // checked, by the replay).
+    for i in 0..all {
+        r.field::<u32>(Arena::Vertex, i, "first")?;
+        r.field::<u32>(Arena::Vertex, i, "second")?;
+    }
+    let initial_start = r.pos;
+    for i in 0..initial {
+        read_initial_one(&mut r, n, i)?;
+    }
+    let (len, len_at) = r.field::<u32>(Arena::KeptMap, 0, "length")?;
+    let kept_map = |field, offset, why| FormatError::Element {
+        arena: Arena::KeptMap,
+        index: 0,
+        field,
+        offset,
+        problem: Problem::KeptMap(why),
+    };
+    // In `u64`: no overflow on 32-bit targets (`all` < 2³¹ by the check above).
+    let replayed = initial as u64 + 3 * all as u64;
+    let wrong_length = kept_map("length", len_at, "not one bit per replayed cylinder");
+    if u64::from(len) != replayed.div_ceil(8) {
+        return Err(wrong_length);
+    }
+    let replayed = usize::try_from(replayed).map_err(|_| wrong_length)?;
+    let map_at = r.pos;
+    let map_end = map_at
+        .checked_add(len as usize)
+        .filter(|&e| e <= r.end)
+        .ok_or(kept_map("bits", map_at, "its part ends inside it"))?;
+    let map =
+        bytes
+            .get(map_at..map_end)
+            .ok_or(kept_map("bits", map_at, "its part ends inside it"))?;
+    r.pos = map_end;
+    r.finish(Part::Complex)?;
+    if !replayed.is_multiple_of(8) && map.last().is_some_and(|b| b >> (replayed % 8) != 0) {
+        return Err(kept_map(
+            "bits",
+            r.pos - 1,
+            "a bit past the last cylinder is set",
+        ));
+    }
+    let ones: usize = map.iter().map(|b| b.count_ones() as usize).sum();
+    if ones != cylinders.len() {
+        return Err(FormatError::Count {
+            field: "cylinders",
+            offset: super::offset::CYLINDERS,
+            count: u64::from(h.cylinders),
+            problem: CountProblem::Inconsistent,
+        });
+    }
+    let mut stream = Pruned {
+        scene,
+        vertex_reader: Reader {
+            bytes,
+            pos: start,
+            end: initial_start,
+        },
+        next_vertex: 0,
+        previous: None,
+        initial_reader: Reader {
+            bytes,
+            pos: initial_start,
+            end: len_at,
+        },
+        initial_start,
+        map,
+        vertices,
+        cylinders,
+        error: None,
+    };
+    let kept_vertices_wrong = FormatError::Count {
+        field: "complex_vertices",
+        offset: super::offset::COMPLEX_VERTICES,
+        count: u64::from(h.complex_vertices),
+        problem: CountProblem::Inconsistent,
+    };
+    let (kept_vertices, _) =
+        replay_stream(n, initial, all, &mut stream, open).map_err(|e| match e {
+            ReplayError::Input => stream.error.unwrap_or(kept_vertices_wrong),
+            ReplayError::Storage => kept_vertices_wrong,
+            e => replay_error(bytes, start, all, initial, e),
+        })?;
+    if kept_vertices != stream.vertices.len() {
+        return Err(kept_vertices_wrong);
+    }
+    Ok(())
+}
+
+/// The replay's input from a version-4 file, and the kept arenas it fills.
+struct Pruned<'b, 's, 'o> {
+    scene: SceneRef<'s>,
+    vertex_reader: Reader<'b>,
+    next_vertex: usize,
+    previous: Option<Angle>,
+    initial_reader: Reader<'b>,
+    initial_start: usize,
+    map: &'b [u8],
+    vertices: &'o mut [Vertex],
+    cylinders: &'o mut [Cylinder],
+    /// The first failure to read the input.
+    error: Option<FormatError>,
+}
+
+impl Pruned<'_, '_, '_> {
+    fn input<T>(&mut self, read: Result<T, FormatError>) -> Result<T, ReplayError> {
+        read.map_err(|e| {
+            self.error = Some(e);
+            ReplayError::Input
+        })
+    }
+}
+
+impl Stream for Pruned<'_, '_, '_> {
+    fn vertex(&mut self) -> Result<Vertex, ReplayError> {
+        let i = self.next_vertex;
+        self.next_vertex += 1;
+        let read = read_vertex(
+            &mut self.vertex_reader,
+            Arena::Vertex,
+            &self.scene,
+            i,
+            Some(&mut self.previous),
+        );
+        self.input(read)
+    }
+
+    fn initial(&mut self, i: usize) -> Result<Cylinder, ReplayError> {
+        if i == 0 {
+            self.initial_reader.pos = self.initial_start;
+        }
+        let read = read_initial_one(&mut self.initial_reader, self.scene.len(), i);
+        self.input(read)
+    }
+
+    fn keep(&mut self, id: usize) -> Result<bool, ReplayError> {
+        let byte = self.map.get(id / 8).ok_or(ReplayError::Storage)?;
+        Ok(byte >> (id % 8) & 1 == 1)
+    }
+
+    fn put_vertex(&mut self, new: usize, v: &Vertex) -> Result<(), ReplayError> {
+        *self.vertices.get_mut(new).ok_or(ReplayError::Storage)? = *v;
+        Ok(())
+    }
+
+    fn cylinders(&mut self) -> &mut [Cylinder] {
+        self.cylinders
+    }
 }
 
 /// Reads the cylinders at θ = 0 of a version-3 file: floor, ceiling, bottom and top, each
@@ -588,18 +803,22 @@ fn read_initial(
     objects: usize,
     cylinders: &mut [Cylinder],
 ) -> Result<(), FormatError> {
-    let a = Arena::Cylinder;
-    let n = objects;
     for (i, slot) in cylinders.iter_mut().enumerate() {
-        *slot = Cylinder {
-            floor: object(r.opt_id(a, i, "floor", n)?),
-            ceiling: object(r.opt_id(a, i, "ceiling", n)?),
-            bottom: chain(r.opt_id(a, i, "bottom", 2 * n)?),
-            top: chain(r.opt_id(a, i, "top", 2 * n)?),
-            ..BLANK_CYLINDER
-        };
+        *slot = read_initial_one(r, objects, i)?;
     }
     Ok(())
+}
+
+/// Cylinder `i` of [`read_initial`].
+fn read_initial_one(r: &mut Reader<'_>, n: usize, i: usize) -> Result<Cylinder, FormatError> {
+    let a = Arena::Cylinder;
+    Ok(Cylinder {
+        floor: object(r.opt_id(a, i, "floor", n)?),
+        ceiling: object(r.opt_id(a, i, "ceiling", n)?),
+        bottom: chain(r.opt_id(a, i, "bottom", 2 * n)?),
+        top: chain(r.opt_id(a, i, "top", 2 * n)?),
+        ..BLANK_CYLINDER
+    })
 }
 
 /// Decodes the history part (`docs/format.md`, "History part") into the arenas of

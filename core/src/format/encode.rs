@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::{
     crc32, FormatError, Header, CHECKSUM_LEN, HEADER_LEN, PART_COMPLEX, PART_HISTORY, PART_SCENE,
-    VERSION, VERSION_REGION, VERSION_REPLAY,
+    VERSION, VERSION_PRUNED, VERSION_REGION, VERSION_REPLAY,
 };
 use crate::line_space::Bound;
 use crate::partition::Region;
@@ -23,9 +23,9 @@ pub struct EncodeOptions {
     /// ([`HistoryParts::compacted`](crate::partition::HistoryParts::compacted)), whatever
     /// this says.
     pub compacted: bool,
-    /// Store every cylinder (version 1) even where version 3 would store only those at
-    /// θ = 0 and let the reader replay the rest: for readers of versions 1 and 2 only.
-    /// (Files with a history or a region store every cylinder anyway.)
+    /// Store every cylinder (version 1; version 2 for a complex pruned to a region) even
+    /// where version 3 (4) would store only those at θ = 0 and let the reader replay the
+    /// rest: for older readers. (Files with a history store every cylinder anyway.)
     pub explicit_cylinders: bool,
 }
 
@@ -40,6 +40,15 @@ struct HistoryView<'h> {
     order: &'h [ObjectId],
     starts: &'h [u32],
     compacted: bool,
+}
+
+/// The kept map of a version-4 file and what it keeps.
+#[derive(Clone, Copy, Debug)]
+struct Kept<'k> {
+    /// One bit per replayed cylinder, least significant bit first.
+    map: &'k [u8],
+    vertices: usize,
+    cylinders: usize,
 }
 
 /// Material discriminants (postcard enum encoding: `varint(u32)`, then the fields).
@@ -144,13 +153,15 @@ fn scene_part(w: &mut Writer<'_>, scene: &SceneRef<'_>) -> Result<(), FormatErro
     Ok(())
 }
 
-/// The complex part: the region (version 2, if pruned), vertices (their two tangent
-/// vertices), then every cylinder or (version 3, `replay`) the cylinders at θ = 0 only,
-/// four ids each, in the order they have in `cylinders`.
+/// The complex part: the region (versions 2 and 4, if pruned), the count of vertices
+/// (version 4), vertices (their two tangent vertices), then every cylinder or (versions 3
+/// and 4, `replay`) the cylinders at θ = 0 only, four ids each, in the order they have in
+/// `cylinders`, and (version 4) the kept map: its byte length, then its bytes.
 fn complex_part(
     w: &mut Writer<'_>,
     region: Option<&Region>,
     replay: bool,
+    kept: Option<&Kept<'_>>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
 ) -> Result<(), FormatError> {
@@ -158,6 +169,9 @@ fn complex_part(
         for c in [r.min().x(), r.min().y(), r.max().x(), r.max().y()] {
             w.put(&c)?;
         }
+    }
+    if kept.is_some() {
+        w.put(&id(vertices.len())?)?;
     }
     put_vertices(w, vertices)?;
     if !replay {
@@ -168,6 +182,12 @@ fn complex_part(
         w.put(&opt(c.ceiling.map(|o| o.0 as usize))?)?;
         w.put(&chain(c.bottom)?)?;
         w.put(&chain(c.top)?)?;
+    }
+    if let Some(k) = kept {
+        w.put(&id(k.map.len())?)?;
+        for b in k.map {
+            w.put(b)?;
+        }
     }
     Ok(())
 }
@@ -229,6 +249,7 @@ fn history_part(w: &mut Writer<'_>, h: &HistoryView<'_>) -> Result<usize, Format
 fn header(
     scene: &SceneRef<'_>,
     region: Option<&Region>,
+    kept: Option<&Kept<'_>>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
     history: Option<&HistoryView<'_>>,
@@ -256,14 +277,16 @@ fn header(
     let scene_bytes = id(w.pos)?;
     // Files with a region or a history store every cylinder (a region keeps only some,
     // and the history names the cylinders as its construction numbered them).
-    let version = if region.is_some() {
+    let version = if kept.is_some() {
+        VERSION_PRUNED
+    } else if region.is_some() {
         VERSION_REGION
     } else if history.is_some() || options.explicit_cylinders {
         VERSION
     } else {
         VERSION_REPLAY
     };
-    if version == VERSION_REPLAY {
+    if version == VERSION_REPLAY || version == VERSION_PRUNED {
         let at_zero = cylinders.iter().filter(|c| c.left == Wall::Zero).count();
         if at_zero != 3 * scene.len() + 1 {
             return Err(FormatError::NotEncodable(
@@ -275,7 +298,8 @@ fn header(
     complex_part(
         &mut w,
         region,
-        version == VERSION_REPLAY,
+        version == VERSION_REPLAY || version == VERSION_PRUNED,
+        kept,
         vertices,
         cylinders,
     )?;
@@ -305,8 +329,8 @@ fn header(
         compacted: history.map_or(options.compacted, |h| h.compacted),
         objects: id(scene.len())?,
         scene_vertices: id(scene.vertices().len())?,
-        complex_vertices: id(vertices.len())?,
-        cylinders: id(cylinders.len())?,
+        complex_vertices: id(kept.map_or(vertices.len(), |k| k.vertices))?,
+        cylinders: id(kept.map_or(cylinders.len(), |k| k.cylinders))?,
         history_nodes: id(history.map_or(0, |h| h.nodes.len()))?,
         history_links,
         scene_bytes,
@@ -322,7 +346,7 @@ pub fn encoded_len(
     cylinders: &[Cylinder],
     options: &EncodeOptions,
 ) -> Result<usize, FormatError> {
-    let h = header(scene, None, vertices, cylinders, None, options)?;
+    let h = header(scene, None, None, vertices, cylinders, None, options)?;
     usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))
 }
 
@@ -340,19 +364,21 @@ pub fn encode_into(
     options: &EncodeOptions,
     out: &mut [u8],
 ) -> Result<usize, FormatError> {
-    write_file(scene, None, vertices, cylinders, None, options, out)
+    write_file(scene, None, None, vertices, cylinders, None, options, out)
 }
 
+#[allow(clippy::too_many_arguments)] // the parts of a file, each optional
 fn write_file(
     scene: &SceneRef<'_>,
     region: Option<&Region>,
+    kept: Option<&Kept<'_>>,
     vertices: &[Vertex],
     cylinders: &[Cylinder],
     history: Option<&HistoryView<'_>>,
     options: &EncodeOptions,
     out: &mut [u8],
 ) -> Result<usize, FormatError> {
-    let h = header(scene, region, vertices, cylinders, history, options)?;
+    let h = header(scene, region, kept, vertices, cylinders, history, options)?;
     let len =
         usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
     let capacity = out.len();
@@ -367,7 +393,14 @@ fn write_file(
         pos: 0,
     };
     scene_part(&mut w, scene)?;
-    complex_part(&mut w, region, h.replays_cylinders(), vertices, cylinders)?;
+    complex_part(
+        &mut w,
+        region,
+        h.replays_cylinders(),
+        kept,
+        vertices,
+        cylinders,
+    )?;
     if let Some(hv) = history {
         history_part(&mut w, hv)?;
     }
@@ -386,9 +419,12 @@ fn write_file(
 /// object; the header's compacted flag is the history's
 /// ([`History::is_compacted`](crate::partition::History::is_compacted)), and the file is
 /// version 1 (every cylinder stored). A complex pruned to a region
-/// ([`Complex::region`](crate::partition::Complex::region)) is written as version 2 with its
-/// region, and without history. Any other complex is written as version 3 (only the
-/// cylinders at θ = 0 stored) unless [`EncodeOptions::explicit_cylinders`].
+/// ([`Complex::region`](crate::partition::Complex::region)) is written without history, as
+/// version 4 ([`encode_region`] of the whole complex, which this rebuilds by the rotational
+/// sweep: pass the whole complex to [`encode_region`] to skip that), or as version 2 (every
+/// kept cylinder stored) with [`EncodeOptions::explicit_cylinders`]. Any other complex is
+/// written as version 3 (only the cylinders at θ = 0 stored) unless
+/// [`EncodeOptions::explicit_cylinders`].
 #[cfg(feature = "alloc")]
 pub fn encode(
     scene: &SceneRef<'_>,
@@ -397,6 +433,11 @@ pub fn encode(
     options: &EncodeOptions,
 ) -> Result<alloc::vec::Vec<u8>, FormatError> {
     let Some(history) = history else {
+        if let (Some(region), false) = (complex.region(), options.explicit_cylinders) {
+            let whole = crate::partition::build_by_sweep(scene)
+                .map_err(|_| FormatError::NotEncodable("the scene's complex cannot be rebuilt"))?;
+            return encode_region(scene, &whole, region, options);
+        }
         return encode_parts(scene, complex, None, options);
     };
     let live = history
@@ -441,13 +482,14 @@ fn encode_parts(
         compacted: p.compacted,
     });
     let region = complex.region();
-    let h = header(scene, region.as_ref(), v, c, view.as_ref(), options)?;
+    let h = header(scene, region.as_ref(), None, v, c, view.as_ref(), options)?;
     let len =
         usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
     let mut out = alloc::vec![0u8; len];
     let len = write_file(
         scene,
         region.as_ref(),
+        None,
         v,
         c,
         view.as_ref(),
@@ -455,5 +497,73 @@ fn encode_parts(
         &mut out,
     )?;
     out.truncate(len);
+    Ok(out)
+}
+
+/// The version-4 file of the whole complex `whole` (not pruned, any numbering) for
+/// viewpoints in `region` (`docs/format.md`, "Version 4"): version 3 of `whole` plus the
+/// region and the kept map, which marks in replay order the cylinders
+/// [`Complex::prune_to_region`](crate::partition::Complex::prune_to_region) keeps. A reader
+/// decodes it to `prune_to_region` of the complex it replays (numbered as the sweep
+/// numbers it), storing only the kept cylinders and vertices. No history; the scene must
+/// be all opaque.
+#[cfg(feature = "alloc")]
+pub fn encode_region(
+    scene: &SceneRef<'_>,
+    whole: &crate::partition::Complex,
+    region: Region,
+    options: &EncodeOptions,
+) -> Result<alloc::vec::Vec<u8>, FormatError> {
+    use crate::partition::{open_slots, replay, Complex, BLANK_CYLINDER};
+    if whole.region().is_some() {
+        return Err(FormatError::NotEncodable(
+            "encode_region needs the whole complex, not a pruned one",
+        ));
+    }
+    // The complex as a reader replays it: the cylinders at θ = 0 in their order, then
+    // three per vertex.
+    let vertices = whole.vertices();
+    let mut cylinders: alloc::vec::Vec<Cylinder> = whole
+        .cylinders()
+        .iter()
+        .filter(|c| c.left == Wall::Zero)
+        .copied()
+        .collect();
+    let initial = cylinders.len();
+    cylinders.resize(initial + 3 * vertices.len(), BLANK_CYLINDER);
+    let mut open = alloc::vec![[None; 2]; open_slots(scene.len())];
+    replay(scene.len(), vertices, initial, &mut cylinders, &mut open)
+        .map_err(|_| FormatError::NotEncodable("the complex does not replay"))?;
+    let replayed = Complex::new_owned(vertices.to_vec(), cylinders, scene);
+    let pruned = replayed
+        .prune_to_region(scene, region)
+        .map_err(|_| FormatError::NotEncodable("the scene has an object that is not opaque"))?;
+    let keep = crate::partition::region::needed_cylinders(&replayed, scene, &region);
+    let mut map = alloc::vec![0u8; keep.len().div_ceil(8)];
+    for (i, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
+        if let Some(b) = map.get_mut(i / 8) {
+            *b |= 1 << (i % 8);
+        }
+    }
+    let kept = Kept {
+        map: &map,
+        vertices: pruned.vertices().len(),
+        cylinders: pruned.cylinders().len(),
+    };
+    let (v, c) = (replayed.vertices(), replayed.cylinders());
+    let h = header(scene, Some(&region), Some(&kept), v, c, None, options)?;
+    let len =
+        usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
+    let mut out = alloc::vec![0u8; len];
+    write_file(
+        scene,
+        Some(&region),
+        Some(&kept),
+        v,
+        c,
+        None,
+        options,
+        &mut out,
+    )?;
     Ok(out)
 }

@@ -42,7 +42,7 @@ pub enum Arena {
     Cylinder,
     /// Vertices of the history (every free bitangent that ever bounded a cylinder).
     HistoryVertex,
-    /// The region of a pruned complex (version 2): its four coordinates.
+    /// The region of a pruned complex (versions 2 and 4): its four coordinates.
     Region,
     /// History nodes (every cylinder that ever existed) and their child counts.
     Node,
@@ -50,9 +50,11 @@ pub enum Arena {
     Link,
     /// Insertions of the randomized construction (object, first node).
     Insertion,
-    /// Scratch slots for the open cylinders while a version-3 file's cylinders are
+    /// Scratch slots for the open cylinders while a version-3 or 4 file's cylinders are
     /// replayed (`decode_into`'s `Scratch::open`).
     OpenSlot,
+    /// The kept map of a version-4 file (one bit per replayed cylinder).
+    KeptMap,
 }
 
 impl Arena {
@@ -69,6 +71,7 @@ impl Arena {
             Arena::Link => "history part: link",
             Arena::Insertion => "history part: insertion",
             Arena::OpenSlot => "open-cylinder slot",
+            Arena::KeptMap => "kept map",
         }
     }
 }
@@ -112,6 +115,8 @@ pub enum Problem {
     WallOrder,
     /// The cylinders of a version-3 file do not replay from its vertices (the reason).
     Replay(&'static str),
+    /// The kept map of a version-4 file is wrong (the reason).
+    KeptMap(&'static str),
 }
 
 impl core::fmt::Display for Problem {
@@ -134,6 +139,7 @@ impl core::fmt::Display for Problem {
             }
             Problem::WallOrder => write!(f, "the right wall is not after the left wall"),
             Problem::Replay(why) => write!(f, "the cylinders do not replay: {why}"),
+            Problem::KeptMap(why) => write!(f, "wrong kept map: {why}"),
         }
     }
 }

@@ -8,7 +8,8 @@
 //! 56   scene    objects (material, vertex count), then vertices as written   (postcard)
 //! ..   complex  vertices (two tangent vertices), then cylinders (8 ids each)  (postcard)
 //!               or, version 3, only the 3n + 1 cylinders at θ = 0 (4 ids each): the
-//!               reader replays the rest from the vertices (`partition::replay`)
+//!               reader replays the rest from the vertices (`partition::replay`);
+//!               version 4: region, vertex count, version 3's data, kept map (bits)
 //! ..   history  optional: vertex count, then history vertices, nodes (cylinders), child
 //!               counts, links, insertions (object, first node)          (postcard)
 //! end-4         CRC-32/IEEE of every byte before it, little endian
@@ -43,7 +44,7 @@ pub use crc::crc32;
 pub use decode::{decode, Loaded};
 pub use decode::{decode_into, Decoded, SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
 #[cfg(feature = "alloc")]
-pub use encode::{encode, encode_history_parts};
+pub use encode::{encode, encode_history_parts, encode_region};
 pub use encode::{encode_into, encoded_len, EncodeOptions};
 pub use error::{Arena, CountProblem, FormatError, Part, Problem};
 
@@ -55,14 +56,21 @@ pub const MAGIC: [u8; 4] = *b"VCX\0";
 /// The format version this code writes for a complex of the whole scene (and reads).
 pub const VERSION: u16 = 1;
 /// The format version of a complex pruned to a region (`vcx build --region`): version 1
-/// plus flag bit 2 and the region at the start of the complex part. Written only for such
-/// complexes, so every other file stays version 1, readable by version-1 readers.
+/// plus flag bit 2 and the region at the start of the complex part, every kept cylinder
+/// stored. Written only for such complexes and only with
+/// [`EncodeOptions::explicit_cylinders`] (by default they are [`VERSION_PRUNED`]).
 pub const VERSION_REGION: u16 = 2;
 /// The format version of a whole complex written without history (the default of
 /// [`encode`] and [`encode_into`]): version 1 with only the cylinders at θ = 0 stored
 /// (floor, ceiling, bottom, top); the reader replays the others from the vertices
 /// (`partition::replay`, the rotational sweep's event loop). Never has a history part.
 pub const VERSION_REPLAY: u16 = 3;
+/// The format version of a complex pruned to a region written without history (the
+/// default of [`encode`] for such a complex): version 3 of the whole complex (plus the
+/// count of its vertices) with the region first and, last, the kept map: one bit per
+/// replayed cylinder. The reader replays the whole complex but stores only the kept
+/// cylinders and the vertices their walls name (`partition::replay`, streaming).
+pub const VERSION_PRUNED: u16 = 4;
 /// Bytes of the fixed-size header.
 pub const HEADER_LEN: usize = 56;
 /// Bytes of the checksum at the end.
@@ -72,12 +80,12 @@ pub const CHECKSUM_LEN: usize = 4;
 pub const FLAG_SEED: u16 = 1 << 0;
 /// Flag bit: the history is search-path compacted (§4.4 of the paper).
 pub const FLAG_COMPACTED: u16 = 1 << 1;
-/// Flag bit (version 2): the complex is pruned to a region of viewpoints, stored at the
+/// Flag bit (versions 2 and 4): the complex is pruned to a region of viewpoints, stored at the
 /// start of the complex part.
 pub const FLAG_REGION: u16 = 1 << 2;
 /// Every flag bit version 1 defines.
 pub const KNOWN_FLAGS: u16 = FLAG_SEED | FLAG_COMPACTED;
-/// Every flag bit version 2 defines.
+/// Every flag bit versions 2 and 4 define.
 pub const KNOWN_FLAGS_V2: u16 = KNOWN_FLAGS | FLAG_REGION;
 
 /// Part bit: the scene.
@@ -110,8 +118,11 @@ pub const MIN_LINK_BYTES: u64 = 1;
 pub const MIN_INSERTION_BYTES: u64 = 2;
 /// See [`MIN_OBJECT_BYTES`]: the history part's vertex count prefix.
 pub const MIN_HISTORY_PREFIX_BYTES: u64 = 1;
-/// See [`MIN_OBJECT_BYTES`]: the region's four coordinates (version 2, flag bit 2).
+/// See [`MIN_OBJECT_BYTES`]: the region's four coordinates (versions 2 and 4, flag bit 2).
 pub const MIN_REGION_BYTES: u64 = 4;
+/// See [`MIN_OBJECT_BYTES`]: what version 4 adds to version 3 besides the region and the
+/// vertices the region drops: the vertex count and the kept map's length prefix.
+pub const MIN_PRUNED_EXTRA_BYTES: u64 = 2;
 
 /// Byte offsets of the header fields (`docs/format.md`, table "Header").
 pub mod offset {
@@ -149,7 +160,7 @@ pub mod offset {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Header {
     /// Format version ([`VERSION`], [`VERSION_REGION`] for a pruned complex,
-    /// [`VERSION_REPLAY`] for replayed cylinders).
+    /// [`VERSION_REPLAY`] for replayed cylinders, [`VERSION_PRUNED`] for both).
     pub version: u16,
     /// Parts bitset ([`PART_SCENE`], [`PART_COMPLEX`], [`PART_HISTORY`]).
     pub parts: u32,
@@ -157,16 +168,17 @@ pub struct Header {
     pub seed: Option<u64>,
     /// Whether the history is search-path compacted (meaningful with a history).
     pub compacted: bool,
-    /// Whether the complex is pruned to a region (version 2, flag bit 2); the region is
-    /// the start of the complex part.
+    /// Whether the complex is pruned to a region (versions 2 and 4, flag bit 2); the
+    /// region is the start of the complex part.
     pub region: bool,
     /// Scene objects.
     pub objects: u32,
     /// Scene vertices (all objects).
     pub scene_vertices: u32,
-    /// Complex vertices (directed free bitangents).
+    /// Complex vertices (directed free bitangents); version 4: those kept (the file
+    /// stores all, counted in the complex part).
     pub complex_vertices: u32,
-    /// Cylinders.
+    /// Cylinders; version 4: those kept.
     pub cylinders: u32,
     /// History nodes (0 without history).
     pub history_nodes: u32,
@@ -234,17 +246,18 @@ impl Header {
             return Err(too_short(offset::FLAGS));
         }
         let version = le_u16(bytes, offset::VERSION);
-        if !(VERSION..=VERSION_REPLAY).contains(&version) {
+        if !(VERSION..=VERSION_PRUNED).contains(&version) {
             return Err(FormatError::UnsupportedVersion {
                 found: version,
-                supported: VERSION_REPLAY,
+                supported: VERSION_PRUNED,
             });
         }
         if bytes.len() < HEADER_LEN + CHECKSUM_LEN {
             return Err(too_short(HEADER_LEN + CHECKSUM_LEN));
         }
         let flags = le_u16(bytes, offset::FLAGS);
-        let known = if version == VERSION_REGION {
+        let with_region = version == VERSION_REGION || version == VERSION_PRUNED;
+        let known = if with_region {
             KNOWN_FLAGS_V2
         } else {
             KNOWN_FLAGS
@@ -254,11 +267,11 @@ impl Header {
                 bits: flags & !known,
             });
         }
-        if version == VERSION_REGION && flags & FLAG_REGION == 0 {
+        if with_region && flags & FLAG_REGION == 0 {
             return Err(FormatError::RegionFlagMissing);
         }
         let parts = le_u32(bytes, offset::PARTS);
-        let known = if version == VERSION_REPLAY {
+        let known = if version == VERSION_REPLAY || version == VERSION_PRUNED {
             KNOWN_PARTS_V3
         } else {
             KNOWN_PARTS
@@ -303,13 +316,18 @@ impl Header {
     }
 
     /// Whether only the cylinders at θ = 0 are stored and the others are replayed from
-    /// the vertices (version 3).
+    /// the vertices (versions 3 and 4).
     pub fn replays_cylinders(&self) -> bool {
-        self.version == VERSION_REPLAY
+        self.version == VERSION_REPLAY || self.version == VERSION_PRUNED
     }
 
-    /// Cylinders stored in the complex part: all, or (version 3) the `3·objects + 1` at
-    /// θ = 0.
+    /// Whether the file stores the whole complex and a kept map (version 4).
+    pub fn has_kept_map(&self) -> bool {
+        self.version == VERSION_PRUNED
+    }
+
+    /// Cylinders stored in the complex part: all, or (versions 3 and 4) the
+    /// `3·objects + 1` at θ = 0.
     pub fn stored_cylinders(&self) -> u32 {
         if self.replays_cylinders() {
             self.objects.saturating_mul(3).saturating_add(1)
@@ -423,7 +441,9 @@ impl Header {
             vertices_min,
             self.complex_bytes,
         )?;
-        let cylinders_min = if self.replays_cylinders() {
+        let cylinders_min = if self.has_kept_map() {
+            (3 * n + 1) * MIN_INITIAL_CYLINDER_BYTES + MIN_PRUNED_EXTRA_BYTES
+        } else if self.replays_cylinders() {
             (3 * n + 1) * MIN_INITIAL_CYLINDER_BYTES
         } else {
             c * MIN_CYLINDER_BYTES

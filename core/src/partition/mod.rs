@@ -50,9 +50,9 @@ pub(crate) use locate::point_in_object;
 pub use locate::{point_in_scene, Location};
 pub use region::{Region, RegionError};
 #[cfg(any(feature = "alloc", feature = "format"))]
-pub use replay::{open_slots, Slots};
+pub use replay::{open_slots, Open, Slots};
 #[cfg(feature = "format")]
-pub(crate) use replay::{replay, ReplayError, BLANK as BLANK_CYLINDER};
+pub(crate) use replay::{replay, replay_stream, ReplayError, Stream, BLANK as BLANK_CYLINDER};
 #[cfg(feature = "alloc")]
 pub use ric::{Budget, BuildOptions, History, HistoryParts, HistoryStats};
 #[cfg(feature = "alloc")]

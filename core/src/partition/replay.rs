@@ -6,12 +6,22 @@
 //! follows from the vertex's chains and objects alone, with no predicate. So the
 //! rotational sweep ([`super::build_by_sweep`]) and the reader of a version-3 file (which
 //! stores only the vertices and the cylinders at θ = 0, `docs/format.md`) share this loop.
-//! It allocates nothing: the open cylinders are indexed in a caller's slice of
+//! It allocates nothing: the open cylinders are kept in a caller's slice of
 //! [`open_slots`] entries, two per chain (at a fixed θ at most two open cylinders share a
 //! chain on one side: the layers before and after its object).
+//!
+//! **Streaming.** The loop reads its input through a [`Stream`] (vertices in θ order, the
+//! cylinders at θ = 0) and writes only the cylinders the stream keeps, renumbered in
+//! replay order, and the vertices a kept cylinder's wall names, renumbered in θ order:
+//! the numbering of [`Complex::prune_to_region`](super::Complex::prune_to_region), whose
+//! kept cylinders at θ = 0 come first because the replay numbers them first. An open
+//! cylinder lives in the open slots with the fields the loop reads, so the storage is the
+//! kept arenas and the slots, never the whole complex (the reader of a version-4 region
+//! file). Keeping everything is the sweep's partition ([`replay`]).
 
 use super::{Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::line_space::{Bound, Chain, Corner};
+use crate::scene::ObjectId;
 
 /// A placeholder cylinder for storage the replay fills.
 pub const BLANK: Cylinder = Cylinder {
@@ -25,8 +35,33 @@ pub const BLANK: Cylinder = Cylinder {
     right_neighbour: None,
 };
 
+/// An open cylinder: its id in replay order, its id among the kept ones, and the fields
+/// the replay reads (the others are written to the kept cylinder, if any).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Open {
+    id: CylinderId,
+    kept: Option<CylinderId>,
+    floor: Option<ObjectId>,
+    ceiling: Option<ObjectId>,
+    bottom: Option<Chain>,
+    top: Option<Chain>,
+}
+
+impl Open {
+    /// The cylinder with these fields, its walls θ = 0 and no neighbours yet.
+    fn cylinder(&self) -> Cylinder {
+        Cylinder {
+            floor: self.floor,
+            ceiling: self.ceiling,
+            bottom: self.bottom,
+            top: self.top,
+            ..BLANK
+        }
+    }
+}
+
 /// Two open cylinders per chain slot.
-pub type Slots = [Option<CylinderId>; 2];
+pub type Slots = [Option<Open>; 2];
 
 /// Entries of the scratch slice [`replay`] needs for a scene of `objects` objects: one
 /// index by bottom chain and one by top chain, each with a slot per chain and one for "no
@@ -42,10 +77,31 @@ pub(crate) enum ReplayError {
     Lost(usize),
     /// Cylinder `.0` would be a third open cylinder on one chain.
     Crowded(usize),
-    /// Cylinder `.0`, open at θ = 2π, has no cylinder at θ = 0 to continue into.
+    /// Cylinder `.0` (replay order), at θ = 0 or open at θ = 2π, has no partner across
+    /// the wall θ = 0.
     Unmatched(usize),
     /// The slices are too short or ids overflow `u32`.
     Storage,
+    /// The stream could not read its input (it keeps its own error; only the file
+    /// reader's can fail).
+    #[cfg_attr(not(feature = "format"), allow(dead_code))]
+    Input,
+}
+
+/// The input and output of [`replay_stream`].
+pub(crate) trait Stream {
+    /// The next vertex in θ order (asked for once each, in order).
+    fn vertex(&mut self) -> Result<Vertex, ReplayError>;
+    /// The cylinder at θ = 0 number `i` (floor, ceiling, bottom, top; the rest is
+    /// ignored). Asked for in order, twice: when opened, and when matched at θ = 2π.
+    fn initial(&mut self, i: usize) -> Result<Cylinder, ReplayError>;
+    /// Whether the cylinder `id` (replay order) is kept: asked in order, the cylinders at
+    /// θ = 0 twice like [`Stream::initial`].
+    fn keep(&mut self, id: usize) -> Result<bool, ReplayError>;
+    /// Stores kept vertex number `new`.
+    fn put_vertex(&mut self, new: usize, v: &Vertex) -> Result<(), ReplayError>;
+    /// The kept cylinders, by new id.
+    fn cylinders(&mut self) -> &mut [Cylinder];
 }
 
 /// Slot of a chain; the last slot is for "no chain".
@@ -57,14 +113,14 @@ fn chain_slot(chain: Option<Chain>, objects: usize) -> usize {
 }
 
 /// The open cylinders by bottom chain and by top chain.
-struct Open<'s> {
+struct OpenSet<'s> {
     objects: usize,
     by_bottom: &'s mut [Slots],
     by_top: &'s mut [Slots],
 }
 
-impl Open<'_> {
-    fn insert(&mut self, id: CylinderId, c: &Cylinder) -> Result<(), ReplayError> {
+impl OpenSet<'_> {
+    fn insert(&mut self, c: Open) -> Result<(), ReplayError> {
         let n = self.objects;
         for (index, chain) in [(&mut *self.by_bottom, c.bottom), (&mut *self.by_top, c.top)] {
             let slots = index
@@ -73,67 +129,104 @@ impl Open<'_> {
             let free = slots
                 .iter_mut()
                 .find(|s| s.is_none())
-                .ok_or(ReplayError::Crowded(id.index()))?;
-            *free = Some(id);
+                .ok_or(ReplayError::Crowded(c.id.index()))?;
+            *free = Some(c);
         }
         Ok(())
     }
 
-    fn remove(&mut self, id: CylinderId, c: &Cylinder) {
+    fn remove(&mut self, c: &Open) {
         let n = self.objects;
         for (index, chain) in [(&mut *self.by_bottom, c.bottom), (&mut *self.by_top, c.top)] {
             if let Some(slots) = index.get_mut(chain_slot(chain, n)) {
                 slots
                     .iter_mut()
-                    .filter(|s| **s == Some(id))
+                    .filter(|s| s.is_some_and(|s| s.id == c.id))
                     .for_each(|s| *s = None);
             }
         }
     }
 }
 
-/// Fills `cylinders[initial..]` (exactly three per vertex) from the cylinders at θ = 0 in
-/// `cylinders[..initial]` (floor, ceiling, bottom and top set; walls and neighbours are
-/// overwritten) and the vertices sorted by θ, and links the cylinders open at θ = 2π to
-/// those at θ = 0. `open` needs [`open_slots`]`(objects)` entries.
+/// A kept cylinder of the output.
+fn output<S: Stream>(stream: &mut S, id: CylinderId) -> Result<&mut Cylinder, ReplayError> {
+    stream
+        .cylinders()
+        .get_mut(id.index())
+        .ok_or(ReplayError::Storage)
+}
+
+/// Hands out the kept cylinders' new ids, in replay order.
+struct Numbering {
+    next: usize,
+}
+
+impl Numbering {
+    fn number<S: Stream>(
+        &mut self,
+        stream: &mut S,
+        id: usize,
+    ) -> Result<Option<CylinderId>, ReplayError> {
+        if !stream.keep(id)? {
+            return Ok(None);
+        }
+        let new = CylinderId::from_index(self.next).ok_or(ReplayError::Storage)?;
+        self.next += 1;
+        Ok(Some(new))
+    }
+}
+
+/// The replay over a [`Stream`] of `initial` cylinders at θ = 0 and `vertices` vertices
+/// (module doc): writes the kept cylinders with their walls and links (a link to a
+/// dropped cylinder is `None`) and the kept vertices; returns how many vertices and
+/// cylinders it kept. `open` needs [`open_slots`]`(objects)` entries.
 ///
-/// Cylinder ids are positions in `cylinders`: those at θ = 0 first, then the three opened
-/// by each vertex in θ order (top wedge, bottom wedge, right wedge), which is how the
-/// sweep numbers them.
-pub(crate) fn replay(
+/// Replay ids: the cylinders at θ = 0 first, then the three opened by each vertex in θ
+/// order (top wedge, bottom wedge, right wedge), which is how the sweep numbers them.
+pub(crate) fn replay_stream<S: Stream>(
     objects: usize,
-    vertices: &[Vertex],
     initial: usize,
-    cylinders: &mut [Cylinder],
+    vertices: usize,
+    stream: &mut S,
     open: &mut [Slots],
-) -> Result<(), ReplayError> {
-    let (by_bottom, rest) = open
+) -> Result<(usize, usize), ReplayError> {
+    let (by_bottom, by_top) = open
         .get_mut(..open_slots(objects))
         .ok_or(ReplayError::Storage)?
         .split_at_mut(2 * objects + 1);
     by_bottom.fill([None; 2]);
-    rest.fill([None; 2]);
-    let mut open = Open {
+    by_top.fill([None; 2]);
+    let mut open = OpenSet {
         objects,
         by_bottom,
-        by_top: rest,
+        by_top,
     };
-    if cylinders.len() != initial + 3 * vertices.len() {
-        return Err(ReplayError::Storage);
-    }
     let id_of = |i: usize| CylinderId::from_index(i).ok_or(ReplayError::Storage);
+    // Every replay id fits (so `initial + 3·vi` below cannot overflow).
+    vertices
+        .checked_mul(3)
+        .and_then(|k| k.checked_add(initial))
+        .ok_or(ReplayError::Storage)?;
+    let mut numbering = Numbering { next: 0 };
     for i in 0..initial {
-        let c = cylinders.get_mut(i).ok_or(ReplayError::Storage)?;
-        c.left = Wall::Zero;
-        c.right = Wall::Zero;
-        c.left_neighbour = None;
-        c.right_neighbour = None;
-        let c = *c;
-        open.insert(id_of(i)?, &c)?;
+        let z = stream.initial(i)?;
+        let c = Open {
+            id: id_of(i)?,
+            kept: numbering.number(stream, i)?,
+            floor: z.floor,
+            ceiling: z.ceiling,
+            bottom: z.bottom,
+            top: z.top,
+        };
+        if let Some(new) = c.kept {
+            *output(stream, new)? = c.cylinder();
+        }
+        open.insert(c)?;
     }
 
-    for (vi, v) in vertices.iter().enumerate() {
-        let wall = Wall::Vertex(VertexId::from_index(vi).ok_or(ReplayError::Storage)?);
+    let mut kept_vertices = 0usize;
+    for vi in 0..vertices {
+        let v = stream.vertex()?;
         let b = v.bitangent;
         let cp = Chain {
             object: b.first_object,
@@ -146,14 +239,13 @@ pub(crate) fn replay(
         let [top, bottom, left, right] = Corner::wedges(&b);
 
         let lost = ReplayError::Lost(vi);
-        let cylinders_now: &[Cylinder] = cylinders;
         let find = |index: &[Slots], chain: Chain, corner: Corner| {
             let slots = index.get(chain_slot(Some(chain), objects))?;
-            slots.iter().flatten().copied().find(|id| {
-                cylinders_now
-                    .get(id.index())
-                    .is_some_and(|c| corner.matches(&b, c.floor, c.ceiling))
-            })
+            slots
+                .iter()
+                .flatten()
+                .copied()
+                .find(|c| corner.matches(&b, c.floor, c.ceiling))
         };
         // Top wedge: bottom arc switches from Q's chain to P's.
         let t = find(open.by_bottom, cq, top).ok_or(lost)?;
@@ -161,126 +253,141 @@ pub(crate) fn replay(
         let d = find(open.by_top, cp, bottom).ok_or(lost)?;
         // Left wedge: between P's chain (below) and Q's (above); closes.
         let l = find(open.by_bottom, cp, left)
-            .filter(|id| {
-                cylinders_now
-                    .get(id.index())
-                    .is_some_and(|c| c.top == Some(cq))
-            })
+            .filter(|c| c.top == Some(cq))
             .ok_or(lost)?;
-        if t == d || t == l || d == l {
+        if t.id == d.id || t.id == l.id || d.id == l.id {
             return Err(lost);
         }
-
-        let mut close = |id: CylinderId| -> Result<Cylinder, ReplayError> {
-            let c = cylinders.get_mut(id.index()).ok_or(ReplayError::Storage)?;
-            c.right = wall;
-            let c = *c;
-            open.remove(id, &c);
-            Ok(c)
-        };
-        let (ct, cd, cl) = (close(t)?, close(d)?, close(l)?);
+        for c in [&t, &d, &l] {
+            open.remove(c);
+        }
 
         // The right wedge's face, from the floors and ceilings just closed.
-        let closed = [ct, cd, cl].map(|c| (c.floor, c.ceiling));
+        let closed = [t, d, l].map(|c| (c.floor, c.ceiling));
         let (floor, ceiling) = right.face(&b, closed).ok_or(lost)?;
 
         let first = initial + 3 * vi;
-        let (id_t, id_d) = (id_of(first)?, id_of(first + 1)?);
-        let opened = [
-            Cylinder {
+        let mut opened = [
+            Open {
                 bottom: Some(cp),
-                left: wall,
-                right: Wall::Zero,
-                left_neighbour: Some(t),
-                right_neighbour: None,
-                ..ct
+                ..t
             },
-            Cylinder {
-                top: Some(cq),
-                left: wall,
-                right: Wall::Zero,
-                left_neighbour: Some(d),
-                right_neighbour: None,
-                ..cd
-            },
-            Cylinder {
+            Open { top: Some(cq), ..d },
+            Open {
                 floor,
                 ceiling,
                 bottom: Some(cq),
                 top: Some(cp),
-                left: wall,
-                right: Wall::Zero,
-                left_neighbour: None,
-                right_neighbour: None,
+                ..t
             },
         ];
-        for (k, c) in opened.iter().enumerate() {
-            let id = id_of(first + k)?;
-            open.insert(id, c)?;
-            *cylinders.get_mut(first + k).ok_or(ReplayError::Storage)? = *c;
+        for (k, c) in opened.iter_mut().enumerate() {
+            c.id = id_of(first + k)?;
+            c.kept = numbering.number(stream, first + k)?;
         }
-        for (from, to) in [(t, id_t), (d, id_d)] {
-            cylinders
-                .get_mut(from.index())
-                .ok_or(ReplayError::Storage)?
-                .right_neighbour = Some(to);
+        // The vertex is kept iff it is a wall of a kept cylinder: of one it closes or opens.
+        let wall = if [t, d, l, opened[0], opened[1], opened[2]]
+            .iter()
+            .any(|c| c.kept.is_some())
+        {
+            stream.put_vertex(kept_vertices, &v)?;
+            let id = VertexId::from_index(kept_vertices).ok_or(ReplayError::Storage)?;
+            kept_vertices += 1;
+            Wall::Vertex(id)
+        } else {
+            Wall::Zero
+        };
+        let [o_t, o_d, o_r] = opened;
+        for (c, next) in [(t, o_t.kept), (d, o_d.kept), (l, None)] {
+            if let Some(new) = c.kept {
+                let c = output(stream, new)?;
+                c.right = wall;
+                c.right_neighbour = next;
+            }
+        }
+        for (c, previous) in [(o_t, t.kept), (o_d, d.kept), (o_r, None)] {
+            if let Some(new) = c.kept {
+                *output(stream, new)? = Cylinder {
+                    left: wall,
+                    left_neighbour: previous,
+                    ..c.cylinder()
+                };
+            }
+            open.insert(c)?;
         }
     }
 
-    // θ = 2π: each open cylinder continues into the cylinder at θ = 0 with the same bottom
-    // chain, floor and ceiling. The index by top chain is done with: it now indexes the
-    // cylinders at θ = 0 by bottom chain.
-    open.by_top.fill([None; 2]);
+    // θ = 2π: each cylinder at θ = 0 continues the open cylinder with the same bottom
+    // chain, floor and ceiling, and no open cylinder is left over.
+    let mut at_zero = Numbering { next: 0 };
     for i in 0..initial {
-        let c = *cylinders.get(i).ok_or(ReplayError::Storage)?;
-        let slots = open
-            .by_top
-            .get_mut(chain_slot(c.bottom, objects))
-            .ok_or(ReplayError::Storage)?;
-        let free = slots
-            .iter_mut()
-            .find(|s| s.is_none())
-            .ok_or(ReplayError::Crowded(i))?;
-        *free = Some(id_of(i)?);
-    }
-    for (slot, ids) in open.by_bottom.iter().enumerate() {
-        for id in ids.iter().flatten().copied() {
-            let c = *cylinders.get(id.index()).ok_or(ReplayError::Storage)?;
-            let first = open
-                .by_top
-                .get(slot)
-                .into_iter()
-                .flatten()
-                .flatten()
-                .copied()
-                .find(|f| {
-                    cylinders
-                        .get(f.index())
-                        .is_some_and(|z| z.floor == c.floor && z.ceiling == c.ceiling)
-                })
-                .ok_or(ReplayError::Unmatched(id.index()))?;
-            cylinders
-                .get_mut(id.index())
-                .ok_or(ReplayError::Storage)?
-                .right_neighbour = Some(first);
-            // Each cylinder at θ = 0 continues exactly one.
-            let z = cylinders
-                .get_mut(first.index())
-                .ok_or(ReplayError::Storage)?;
-            if z.left_neighbour.is_some() {
-                return Err(ReplayError::Unmatched(id.index()));
-            }
-            z.left_neighbour = Some(id);
+        let z = stream.initial(i)?;
+        let z_kept = at_zero.number(stream, i)?;
+        let c = open
+            .by_bottom
+            .get_mut(chain_slot(z.bottom, objects))
+            .and_then(|slots| {
+                slots
+                    .iter_mut()
+                    .find(|c| c.is_some_and(|c| c.floor == z.floor && c.ceiling == z.ceiling))
+            })
+            .and_then(Option::take)
+            .ok_or(ReplayError::Unmatched(i))?;
+        if let Some(new) = c.kept {
+            output(stream, new)?.right_neighbour = z_kept;
+        }
+        if let Some(new) = z_kept {
+            output(stream, new)?.left_neighbour = c.kept;
         }
     }
-    // And each is continued by exactly one.
-    match cylinders
-        .get(..initial)
-        .ok_or(ReplayError::Storage)?
-        .iter()
-        .position(|z| z.left_neighbour.is_none())
-    {
-        Some(i) => Err(ReplayError::Unmatched(i)),
-        None => Ok(()),
+    if let Some(c) = open.by_bottom.iter().flatten().flatten().next() {
+        return Err(ReplayError::Unmatched(c.id.index()));
     }
+    Ok((kept_vertices, numbering.next))
+}
+
+/// Everything kept: the partition in caller storage.
+struct Whole<'a> {
+    vertices: core::slice::Iter<'a, Vertex>,
+    cylinders: &'a mut [Cylinder],
+}
+
+impl Stream for Whole<'_> {
+    fn vertex(&mut self) -> Result<Vertex, ReplayError> {
+        self.vertices.next().copied().ok_or(ReplayError::Storage)
+    }
+    fn initial(&mut self, i: usize) -> Result<Cylinder, ReplayError> {
+        self.cylinders.get(i).copied().ok_or(ReplayError::Storage)
+    }
+    fn keep(&mut self, _: usize) -> Result<bool, ReplayError> {
+        Ok(true)
+    }
+    fn put_vertex(&mut self, _: usize, _: &Vertex) -> Result<(), ReplayError> {
+        Ok(())
+    }
+    fn cylinders(&mut self) -> &mut [Cylinder] {
+        self.cylinders
+    }
+}
+
+/// Fills `cylinders[initial..]` (exactly three per vertex) from the cylinders at θ = 0 in
+/// `cylinders[..initial]` (floor, ceiling, bottom and top set; walls and neighbours are
+/// overwritten) and the vertices sorted by θ, and links the cylinders open at θ = 2π to
+/// those at θ = 0: [`replay_stream`] keeping everything. `open` needs
+/// [`open_slots`]`(objects)` entries.
+pub(crate) fn replay(
+    objects: usize,
+    vertices: &[Vertex],
+    initial: usize,
+    cylinders: &mut [Cylinder],
+    open: &mut [Slots],
+) -> Result<(), ReplayError> {
+    if cylinders.len() != initial + 3 * vertices.len() {
+        return Err(ReplayError::Storage);
+    }
+    let mut whole = Whole {
+        vertices: vertices.iter(),
+        cylinders,
+    };
+    replay_stream(objects, initial, vertices.len(), &mut whole, open).map(|_| ())
 }

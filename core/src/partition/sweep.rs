@@ -64,7 +64,7 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
     replay(scene.len(), &vertices, initial, &mut cylinders, &mut open).map_err(|e| match e {
         ReplayError::Lost(vertex) => ComplexError::SweepLostCylinder { vertex },
         ReplayError::Crowded(_) | ReplayError::Unmatched(_) => ComplexError::SweepUnmatchedAtZero,
-        ReplayError::Storage => ComplexError::TooLarge,
+        ReplayError::Storage | ReplayError::Input => ComplexError::TooLarge,
     })?;
     Ok(Complex::new_owned(vertices, cylinders, scene))
 }

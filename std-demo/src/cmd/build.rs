@@ -51,8 +51,9 @@
 //! ([`vcx::partition::Complex::prune_to_region`]; a conservative superset decided
 //! exactly, see `core/src/partition/region.rs`). The summary ends with `; region
 //! X0,Y0,X1,Y1: kept K of C cylinders` (`--stats-json`: `cylinders` is K, plus `region`
-//! `[x0, y0, x1, y1]` and `full_cylinders` C), and `-o` writes format version 2 with the
-//! region. Such a file has no history: `--history always` with `--region` is an error
+//! `[x0, y0, x1, y1]` and `full_cylinders` C), and `-o` writes format version 4 with the
+//! region: the whole complex as version 3 stores it and a bit per cylinder, whether it is
+//! kept (version 2, every kept cylinder stored, with `--explicit-cylinders`). Such a file has no history: `--history always` with `--region` is an error
 //! (exit status 2), `auto` writes none. Scenes with mirrors, refractive objects or screens
 //! are refused (exit status 2): ray trees leave the box.
 
@@ -121,9 +122,10 @@ pub struct Args {
     /// scene units; all-opaque scenes only; no history).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
     pub region: Option<String>,
-    /// With `-o`: store every cylinder (format version 1), for readers that predate
-    /// version 3; by default a file without history or region stores only the cylinders at
-    /// θ = 0 and the reader replays the rest from the vertices (version 3).
+    /// With `-o`: store every cylinder (format version 1; with `--region` every kept one,
+    /// version 2), for readers that predate version 3 (4); by default a file without
+    /// history stores only the cylinders at θ = 0 and the reader replays the rest from the
+    /// vertices (version 3; with `--region` version 4, plus a bit per kept cylinder).
     #[arg(long)]
     pub explicit_cylinders: bool,
     /// Build the history without search path compaction (§4.4): split and merge as two
@@ -172,6 +174,9 @@ pub fn needs_history(scene: &SceneRef<'_>) -> bool {
 pub struct Built {
     /// The complex (validated).
     pub complex: Complex,
+    /// The whole complex when `complex` is pruned to a region: what a version-4 region
+    /// file stores (`vcx::format::encode_region`).
+    pub whole: Option<Complex>,
     /// The construction history (randomized incremental construction only).
     pub history: Option<History>,
     /// Wall time of the construction alone, in seconds.
@@ -210,6 +215,7 @@ pub fn build_with(
     complex.validate(scene).map_err(internal)?;
     Ok(Built {
         complex,
+        whole: None,
         history,
         seconds,
     })
@@ -276,10 +282,11 @@ pub fn run(args: &Args) -> Result<(), Failure> {
     let mut built = build_with(&args.scene, &scene, method, &options)?;
     let full_cylinders = built.complex.cylinders().len();
     if let Some(r) = region {
-        built.complex = built
+        let pruned = built
             .complex
             .prune_to_region(&scene, r)
             .map_err(|e| Failure::bad_input(format!("{}: --region: {e}", args.scene.display())))?;
+        built.whole = Some(core::mem::replace(&mut built.complex, pruned));
         // The pruned complex passes the checks a loader runs on it.
         built.complex.validate(&scene).map_err(|e| Failure {
             message: format!("{}: internal: pruned complex: {e}", args.scene.display()),
@@ -367,7 +374,14 @@ pub(crate) fn encode_vcx(
         explicit_cylinders: explicit,
     };
     let history = built.history.as_ref().filter(|_| with_history);
-    vcx::format::encode(scene, &built.complex, history, &options).map_err(|e| Failure {
+    // A region file (version 4) stores the whole complex and which cylinders it keeps.
+    let encoded = match (&built.whole, built.complex.region()) {
+        (Some(whole), Some(region)) if !explicit => {
+            vcx::format::encode_region(scene, whole, region, &options)
+        }
+        _ => vcx::format::encode(scene, &built.complex, history, &options),
+    };
+    encoded.map_err(|e| Failure {
         message: format!("{}: internal: cannot encode: {e}", path.display()),
         code: EXIT_INTERNAL,
     })

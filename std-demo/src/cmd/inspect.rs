@@ -16,19 +16,24 @@
 //!   checksum         4 bytes  CRC-32 0xd1d3a00d
 //! ```
 //!
-//! `N stored`: a version-3 file stores only the `3n + 1` cylinders at θ = 0 and the reader
-//! replays the others from the vertices; versions 1 and 2 store every cylinder.
+//! `N stored`: a version-3 (or 4) file stores only the `3n + 1` cylinders at θ = 0 and the
+//! reader replays the others from the vertices; versions 1 and 2 store every cylinder.
 //!
 //! With a history (`vcx build --history always`) its line reads `history  B bytes  N nodes,
 //! L links, depth D (b bytes per node)`, the depth being the longest root-to-leaf path of
 //! the decoded DAG (`History::stats`).
 //!
-//! A file pruned to a region (`vcx build --region`, format version 2) has a line
-//! `region   viewpoints in X0,Y0,X1,Y1 only (a pruned complex)` after the first.
+//! A file pruned to a region (`vcx build --region`, format version 4, or 2 with
+//! `--explicit-cylinders`) has a line `region   viewpoints in X0,Y0,X1,Y1 only (a pruned
+//! complex)` after the first. Version 4 stores the whole complex and a kept map: its
+//! complex line reads `complex  B bytes  V' of V vertices and C' of C cylinders kept, N
+//! stored (b bytes per kept cylinder)`, the reader replaying all `C` and keeping `C'`.
 //!
 //! With `--json` one object: `file`, `version`, `bytes`, `seed` (or null), `compacted`,
 //! `region` (`[x0, y0, x1, y1]`, or null), `parts` — `header`, `scene`, `complex` (with
-//! `vertices`, `cylinders` and `stored_cylinders`), `history` (null when absent; else
+//! `vertices`, `cylinders` and `stored_cylinders` — the kept ones in a region file — and
+//! `replayed_vertices`, `replayed_cylinders`: the whole complex's in version 4, else
+//! null), `history` (null when absent; else
 //! `bytes`, `nodes`, `links`, `depth`), `checksum` — each with its `bytes` and its counts,
 //! and `checksum_value` as a hex string.
 
@@ -70,8 +75,32 @@ pub(crate) struct Described {
     pub depth: Option<usize>,
     /// The stored CRC-32.
     pub crc: u32,
-    /// The region the complex is pruned to (`vcx build --region`, version 2), if any.
+    /// The region the complex is pruned to (`vcx build --region`, versions 2 and 4), if any.
     pub region: Option<vcx::partition::Region>,
+    /// Version 4: the whole complex's vertices and cylinders, which the reader replays.
+    pub replayed: Option<(u64, u64)>,
+}
+
+/// The count of all vertices at the start of a version-4 complex part, after the region's
+/// four varints (the file was decoded already, so they end).
+fn replayed_vertices(bytes: &[u8], h: &Header) -> Option<u64> {
+    let mut pos = h.part_range(Part::Complex).start;
+    for _ in 0..4 {
+        while bytes.get(pos)? & 0x80 != 0 {
+            pos += 1;
+        }
+        pos += 1;
+    }
+    let mut v = 0u64;
+    for shift in (0..35).step_by(7) {
+        let b = *bytes.get(pos)?;
+        v |= u64::from(b & 0x7f) << shift;
+        pos += 1;
+        if b & 0x80 == 0 {
+            return Some(v);
+        }
+    }
+    None
 }
 
 /// Decodes and validates a file's bytes and describes them (also used by `vcx bench
@@ -85,11 +114,17 @@ pub(crate) fn describe(bytes: &[u8]) -> Result<Described, vcx::format::FormatErr
         .get(bytes.len().saturating_sub(CHECKSUM_LEN)..)
         .and_then(|t| <[u8; 4]>::try_from(t).ok())
         .map_or(0, u32::from_le_bytes);
+    let replayed = if header.has_kept_map() {
+        replayed_vertices(bytes, &header).map(|v| (v, 3 * u64::from(header.objects) + 1 + 3 * v))
+    } else {
+        None
+    };
     Ok(Described {
         header,
         depth,
         crc,
         region,
+        replayed,
     })
 }
 
@@ -104,6 +139,7 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         depth,
         crc,
         region,
+        replayed,
     } = describe(&bytes).map_err(fail)?;
     // The region as `x0,y0,x1,y1` in scene units (exact: the grid is 2⁻¹⁶).
     let corners = region.map(|r| {
@@ -131,6 +167,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
                     "vertices": h.complex_vertices,
                     "cylinders": h.cylinders,
                     "stored_cylinders": h.stored_cylinders(),
+                    "replayed_vertices": replayed.map(|r| r.0),
+                    "replayed_cylinders": replayed.map(|r| r.1),
                 },
                 "history": if h.has_history() {
                     json!({
@@ -177,14 +215,26 @@ pub fn run(args: &Args) -> Result<(), Failure> {
             grouped(h.objects.into()),
             grouped(h.scene_vertices.into()),
         ));
-        t.push_str(&format!(
-            "  complex  {:>9} bytes  {} vertices ({} free bitangents), {} cylinders, {} stored ({per_cylinder:.2} bytes per cylinder)\n",
-            range(Part::Complex),
-            grouped(h.complex_vertices.into()),
-            grouped((h.complex_vertices / 2).into()),
-            grouped(h.cylinders.into()),
-            grouped(h.stored_cylinders().into()),
-        ));
+        if let Some((v, c)) = replayed {
+            t.push_str(&format!(
+                "  complex  {:>9} bytes  {} of {} vertices and {} of {} cylinders kept, {} stored ({per_cylinder:.2} bytes per kept cylinder)\n",
+                range(Part::Complex),
+                grouped(h.complex_vertices.into()),
+                grouped(v),
+                grouped(h.cylinders.into()),
+                grouped(c),
+                grouped(h.stored_cylinders().into()),
+            ));
+        } else {
+            t.push_str(&format!(
+                "  complex  {:>9} bytes  {} vertices ({} free bitangents), {} cylinders, {} stored ({per_cylinder:.2} bytes per cylinder)\n",
+                range(Part::Complex),
+                grouped(h.complex_vertices.into()),
+                grouped((h.complex_vertices / 2).into()),
+                grouped(h.cylinders.into()),
+                grouped(h.stored_cylinders().into()),
+            ));
+        }
         if h.has_history() {
             let per_node = f64::from(h.history_bytes) / f64::from(h.history_nodes.max(1));
             t.push_str(&format!(

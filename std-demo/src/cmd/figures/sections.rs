@@ -636,8 +636,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         };
         let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
         let full_bytes = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?;
-        // The region file stores every kept cylinder: compare it with the whole complex
-        // stored the same way too.
+        // The whole complex with every cylinder stored, as version 2 stores a region's.
         let explicit = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, true)?.len();
         let full = crate::input::from_bytes(path, &full_bytes)?;
         whole.push((f64::from(n), full_bytes.len() as f64));
@@ -676,10 +675,12 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                     .complex
                     .prune_to_region(&scene, region)
                     .map_err(internal)?,
+                whole: Some(built.complex.clone()),
                 history: None,
                 seconds: built.seconds,
             };
             let bytes = build::encode_vcx(path, &scene, &pruned, false, BUILD_SEED, false)?;
+            let v2 = build::encode_vcx(path, &scene, &pruned, false, BUILD_SEED, true)?.len();
             let boxed = crate::input::from_bytes(path, &bytes)?;
             let points = bench::Points::Given(bench::random_points_in(
                 &scene,
@@ -708,7 +709,11 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 thousands(full_bytes.len()),
                 thousands(explicit),
                 thousands(bytes.len()),
-                format!("{:.1} %", 100.0 * bytes.len() as f64 / explicit as f64),
+                format!(
+                    "{:.1} %",
+                    100.0 * bytes.len() as f64 / full_bytes.len() as f64
+                ),
+                thousands(v2),
                 thousands(f.cylinders),
                 thousands(r.cylinders),
                 format!("{:.1}", f.seconds * 1e6),
@@ -728,11 +733,13 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             notes,
             " Size target of the device-format issue with a region: the n = 256 grid scene \
              pruned to a centred box of 1/{k} of its area takes {} bytes, {} 256 KiB \
-             ({}). The whole complex without history takes fewer bytes still, its cylinders \
-             replayed from its vertices (format version 3, \"Device format sizes\"); a pruned \
-             complex cannot be replayed, so a region file stores every cylinder it keeps (version \
-             2), and what it saves against the replayed whole file is RAM: the cylinders a \
-             device decodes (\"kept\"), 64 bytes each.",
+             ({}). A region file (format version 4) is the whole complex as version 3 stores \
+             it — its cylinders replayed from its vertices — plus the box and one bit per \
+             cylinder, whether it is kept: a little larger than the whole file, whatever the \
+             box. What it saves is RAM: the reader replays every cylinder but stores only the \
+             kept ones (\"kept\", 64 bytes each, and the vertices they name). Storing the \
+             kept cylinders instead (version 2, `--explicit-cylinders`; \"kept cylinders \
+             stored\") costs about 16 bytes per kept cylinder.",
             thousands(b),
             if b <= LIMIT { "within" } else { "over" },
             if b <= LIMIT {
@@ -755,8 +762,10 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
              construction (seed {BUILD_SEED}) without history, pruned to centred boxes of 1/4, \
              1/16 and 1/64 of the scene's bounding-box area; file bytes as `vcx build -o` \
              encodes them (the whole complex as written by default — version 3, cylinders \
-             replayed — and with `--explicit-cylinders`, every cylinder stored as in a region \
-             file; share: region file / the latter); µs per view: the median over {r} random free points in the box \
+             replayed — and with `--explicit-cylinders`, every cylinder stored; the region \
+             file as written by default — version 4, the whole complex replayed and a kept \
+             map — and with `--explicit-cylinders`, version 2, every kept cylinder stored; \
+             share: region file / whole file); µs per view: the median over {r} random free points in the box \
              (seed {SEED}) of the best of {p} runs, from the whole file and from the region \
              file, the same points. Alone: `vcx build g.json --region BOX -o r.vcx; vcx bench \
              views r.vcx` (its random points are drawn in the stored region) and `vcx bench \
@@ -773,6 +782,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 "whole, every cylinder stored",
                 "region file",
                 "share",
+                "region, kept cylinders stored",
                 "cylinders",
                 "kept",
                 "µs / view whole",
