@@ -22,7 +22,7 @@ use vcx::geom::{Point, QueryPoint};
 use vcx::line_space::{Bound, Chain};
 use vcx::partition::{
     BorderBuffers, BorderSizes, BufferTooSmall, Complex, Cylinder, CylinderId, Slices, Slots,
-    Vertex,
+    Vertex, ZERO_SLOTS,
 };
 use vcx::render::{angle_order, coverage, Camera, FrameInterval, RenderError};
 use vcx::walk::{frame_tree_into, view_capacity, view_into, TreeScratch, ViewInterval, WalkError};
@@ -117,7 +117,7 @@ impl Arenas {
         Arenas {
             objects: [SceneObject::BLANK; OBJECTS],
             points: [ORIGIN; SCENE_VERTICES],
-            open: [[None; 2]; Scratch::open_len(OBJECTS)],
+            open: [ZERO_SLOTS; Scratch::open_len(OBJECTS)],
             vertices: [format::BLANK_VERTEX; COMPLEX_VERTICES],
             cylinders: [ZERO_CYLINDER; CYLINDERS],
         }

@@ -50,7 +50,7 @@ pub(crate) use locate::point_in_object;
 pub use locate::{point_in_scene, Location};
 pub use region::{Region, RegionError};
 #[cfg(any(feature = "alloc", feature = "format"))]
-pub use replay::{open_slots, Open, Slots};
+pub use replay::{open_slots, Open, Slots, ZERO_SLOTS};
 #[cfg(feature = "format")]
 pub(crate) use replay::{replay, replay_stream, ReplayError, Stream, BLANK as BLANK_CYLINDER};
 #[cfg(feature = "alloc")]

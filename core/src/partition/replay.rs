@@ -63,6 +63,25 @@ impl Open {
 /// Two open cylinders per chain slot.
 pub type Slots = [Option<Open>; 2];
 
+/// Slots whose bytes are all zero, for a `static` scratch of them to land in `.bss`
+/// rather than in `.data` with a flash image (`None` of an `Open` is a niche value of a
+/// chain's bound, not 0). The replay clears its slots before use, so any value will do.
+pub const ZERO_SLOTS: Slots = {
+    let chain = Some(Chain {
+        object: ObjectId(0),
+        bound: Bound::Lower,
+    });
+    let zero = Open {
+        id: CylinderId::ZERO,
+        kept: None,
+        floor: None,
+        ceiling: None,
+        bottom: chain,
+        top: chain,
+    };
+    [Some(zero); 2]
+};
+
 /// Entries of the scratch slice [`replay`] needs for a scene of `objects` objects: one
 /// index by bottom chain and one by top chain, each with a slot per chain and one for "no
 /// chain" (the unbounded cylinders).
