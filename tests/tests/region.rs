@@ -232,6 +232,20 @@ fn boxes_through_vertices() {
     assert!(compared > 50, "only {compared}");
 }
 
+/// The scene with every object opaque (its polygons as written).
+fn opaque(s: &Scene) -> Scene {
+    let sr = s.as_ref();
+    let polys: Vec<Vec<Point>> = sr
+        .objects()
+        .iter()
+        .map(|o| {
+            let p = sr.polygon(o);
+            (0..p.len()).map(|j| p[o.written_vertex_id(j)]).collect()
+        })
+        .collect();
+    Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap()
+}
+
 /// The degenerate scenes of the fuzz generators (collinear lattices, slivers, extreme
 /// coordinates), made opaque.
 #[test]
@@ -242,16 +256,7 @@ fn degenerate_scenes() {
         let Some(s) = common::random_spec_scene(&mut rng) else {
             continue;
         };
-        let sr = s.as_ref();
-        let polys: Vec<Vec<Point>> = sr
-            .objects()
-            .iter()
-            .map(|o| {
-                let p = sr.polygon(o);
-                (0..p.len()).map(|j| p[o.written_vertex_id(j)]).collect()
-            })
-            .collect();
-        let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+        let s = opaque(&s);
         let sr = s.as_ref();
         if sr.is_empty() {
             continue;
@@ -746,16 +751,7 @@ fn v4_of_degenerate_scenes() {
         let Some(s) = common::random_spec_scene(&mut rng) else {
             continue;
         };
-        let sr = s.as_ref();
-        let polys: Vec<Vec<Point>> = sr
-            .objects()
-            .iter()
-            .map(|o| {
-                let p = sr.polygon(o);
-                (0..p.len()).map(|j| p[o.written_vertex_id(j)]).collect()
-            })
-            .collect();
-        let s = Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).unwrap();
+        let s = opaque(&s);
         let sr = s.as_ref();
         if sr.is_empty() {
             continue;
