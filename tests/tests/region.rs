@@ -250,7 +250,22 @@ fn opaque(s: &Scene) -> Scene {
 /// coordinates), made opaque.
 #[test]
 fn degenerate_scenes() {
-    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for_degenerate_scenes(21, |sr, c, rng| {
+        for _ in 0..2 {
+            let r = random_box(sr, rng);
+            let points = points_in(&r, 4, rng);
+            check_box(sr, c, r, &points, 2);
+        }
+    });
+}
+
+/// Calls `each` on up to 60 (× `scale()`) degenerate scenes of the fuzz generators, made
+/// opaque, with their complex, and checks that at least 30 came.
+fn for_degenerate_scenes(
+    seed: u64,
+    mut each: impl FnMut(&SceneRef<'_>, &Complex, &mut ChaCha8Rng),
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut done = 0;
     for _ in 0..600 * scale() {
         let Some(s) = common::random_spec_scene(&mut rng) else {
@@ -262,11 +277,7 @@ fn degenerate_scenes() {
             continue;
         }
         let c = build_by_sweep(&sr).unwrap();
-        for _ in 0..2 {
-            let r = random_box(&sr, &mut rng);
-            let points = points_in(&r, 4, &mut rng);
-            check_box(&sr, &c, r, &points, 2);
-        }
+        each(&sr, &c, &mut rng);
         done += 1;
         if done == 60 * scale() {
             break;
@@ -745,27 +756,11 @@ proptest! {
 /// The degenerate scenes of the fuzz generators, made opaque, in version 4.
 #[test]
 fn v4_of_degenerate_scenes() {
-    let mut rng = ChaCha8Rng::seed_from_u64(23);
-    let mut done = 0;
-    for _ in 0..600 * scale() {
-        let Some(s) = common::random_spec_scene(&mut rng) else {
-            continue;
-        };
-        let s = opaque(&s);
-        let sr = s.as_ref();
-        if sr.is_empty() {
-            continue;
-        }
-        let c = build_by_sweep(&sr).unwrap();
+    for_degenerate_scenes(23, |sr, c, rng| {
         for _ in 0..2 {
-            v4_equals_pruned_v3(&sr, &c, random_box(&sr, &mut rng));
+            v4_equals_pruned_v3(sr, c, random_box(sr, rng));
         }
-        done += 1;
-        if done == 60 * scale() {
-            break;
-        }
-    }
-    assert!(done >= 30, "only {done} degenerate scenes");
+    });
 }
 
 /// Views walked in a decoded version-4 file equal the exact reference's for the scene as

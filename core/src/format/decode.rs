@@ -671,15 +671,13 @@ fn decode_pruned(
     }
     let replayed = usize::try_from(replayed).map_err(|_| wrong_length)?;
     let map_at = r.pos;
-    let map_end = map_at
-        .checked_add(len as usize)
-        .filter(|&e| e <= r.end)
-        .ok_or(kept_map("bits", map_at, "its part ends inside it"))?;
-    let map =
-        bytes
-            .get(map_at..map_end)
-            .ok_or(kept_map("bits", map_at, "its part ends inside it"))?;
-    r.pos = map_end;
+    let map_end = map_at.checked_add(len as usize).filter(|&e| e <= r.end);
+    let map = map_end.and_then(|e| bytes.get(map_at..e)).ok_or(kept_map(
+        "bits",
+        map_at,
+        "its part ends inside it",
+    ))?;
+    r.pos = map_at + map.len();
     r.finish(Part::Complex)?;
     if !replayed.is_multiple_of(8) && map.last().is_some_and(|b| b >> (replayed % 8) != 0) {
         return Err(kept_map(

@@ -482,22 +482,7 @@ fn encode_parts(
         compacted: p.compacted,
     });
     let region = complex.region();
-    let h = header(scene, region.as_ref(), None, v, c, view.as_ref(), options)?;
-    let len =
-        usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
-    let mut out = alloc::vec![0u8; len];
-    let len = write_file(
-        scene,
-        region.as_ref(),
-        None,
-        v,
-        c,
-        view.as_ref(),
-        options,
-        &mut out,
-    )?;
-    out.truncate(len);
-    Ok(out)
+    to_vec(scene, region.as_ref(), None, v, c, view.as_ref(), options)
 }
 
 /// The version-4 file of the whole complex `whole` (not pruned, any numbering) for
@@ -535,10 +520,10 @@ pub fn encode_region(
     replay(scene.len(), vertices, initial, &mut cylinders, &mut open)
         .map_err(|_| FormatError::NotEncodable("the complex does not replay"))?;
     let replayed = Complex::new_owned(vertices.to_vec(), cylinders, scene);
-    let pruned = replayed
-        .prune_to_region(scene, region)
+    let keep = replayed
+        .needed_in(scene, &region)
         .map_err(|_| FormatError::NotEncodable("the scene has an object that is not opaque"))?;
-    let keep = crate::partition::region::needed_cylinders(&replayed, scene, &region);
+    let pruned = replayed.keep_only(scene, region, &keep);
     let mut map = alloc::vec![0u8; keep.len().div_ceil(8)];
     for (i, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
         if let Some(b) = map.get_mut(i / 8) {
@@ -551,19 +536,27 @@ pub fn encode_region(
         cylinders: pruned.cylinders().len(),
     };
     let (v, c) = (replayed.vertices(), replayed.cylinders());
-    let h = header(scene, Some(&region), Some(&kept), v, c, None, options)?;
+    to_vec(scene, Some(&region), Some(&kept), v, c, None, options)
+}
+
+/// [`write_file`] into a vector of the file's length.
+#[cfg(feature = "alloc")]
+fn to_vec(
+    scene: &SceneRef<'_>,
+    region: Option<&Region>,
+    kept: Option<&Kept<'_>>,
+    vertices: &[Vertex],
+    cylinders: &[Cylinder],
+    history: Option<&HistoryView<'_>>,
+    options: &EncodeOptions,
+) -> Result<alloc::vec::Vec<u8>, FormatError> {
+    let h = header(scene, region, kept, vertices, cylinders, history, options)?;
     let len =
         usize::try_from(h.file_len()).map_err(|_| FormatError::NotEncodable("file too large"))?;
     let mut out = alloc::vec![0u8; len];
-    write_file(
-        scene,
-        Some(&region),
-        Some(&kept),
-        v,
-        c,
-        None,
-        options,
-        &mut out,
+    let len = write_file(
+        scene, region, kept, vertices, cylinders, history, options, &mut out,
     )?;
+    out.truncate(len);
     Ok(out)
 }

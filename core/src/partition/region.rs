@@ -411,6 +411,17 @@ impl Complex {
         scene: &SceneRef<'_>,
         region: Region,
     ) -> Result<Complex, RegionError> {
+        let keep = self.needed_in(scene, &region)?;
+        Ok(self.keep_only(scene, region, &keep))
+    }
+
+    /// [`needed_cylinders`] for [`Complex::prune_to_region`], after its checks: the
+    /// complex is whole and the scene all opaque.
+    pub(crate) fn needed_in(
+        &self,
+        scene: &SceneRef<'_>,
+        region: &Region,
+    ) -> Result<alloc::vec::Vec<bool>, RegionError> {
         if self.region.is_some() {
             return Err(RegionError::AlreadyPruned);
         }
@@ -421,7 +432,12 @@ impl Complex {
         {
             return Err(RegionError::SecondaryRays { object });
         }
-        let keep = needed_cylinders(self, scene, &region);
+        Ok(needed_cylinders(self, scene, region))
+    }
+
+    /// The complex of the cylinders `keep` marks, renumbered as
+    /// [`Complex::prune_to_region`] describes, for `region`.
+    pub(crate) fn keep_only(&self, scene: &SceneRef<'_>, region: Region, keep: &[bool]) -> Complex {
         let kept = |i: usize| keep.get(i).copied().unwrap_or(false);
         // New ids: the kept cylinders at θ = 0, then the others, each in the old order.
         let order: alloc::vec::Vec<usize> = (0..self.cylinders.len())
@@ -481,6 +497,6 @@ impl Complex {
             .collect();
         let mut pruned = Complex::new_owned(vertices, cylinders, scene);
         pruned.region = Some(region);
-        Ok(pruned)
+        pruned
     }
 }
