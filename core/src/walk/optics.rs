@@ -87,19 +87,18 @@ pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Opt
         return None;
     }
     let aq = a.to_query();
+    // Differences subtracted in 64 bits (scene coordinates below 2³⁰, query ones at most
+    // 2⁵²): the compiler then knows they fit and multiplies them as such.
     let (dx, dy) = (
-        i128::from(b.x()) - i128::from(a.x()),
-        i128::from(b.y()) - i128::from(a.y()),
+        i128::from(i64::from(b.x()) - i64::from(a.x())),
+        i128::from(i64::from(b.y()) - i64::from(a.y())),
     );
     let n = dx * dx + dy * dy;
     if n == 0 {
         return None;
     }
     // w in query units; d in scene units. t·d/N is then in query units as well.
-    let (wx, wy) = (
-        i128::from(e.x()) - i128::from(aq.x()),
-        i128::from(e.y()) - i128::from(aq.y()),
-    );
+    let (wx, wy) = (i128::from(e.x() - aq.x()), i128::from(e.y() - aq.y()));
     let (kn, kd) = (i128::from(kn), i128::from(kd));
     let (x, y) = if kd == 1 && (dx == 0 || dy == 0) {
         // An axis-parallel line with an integer factor (a mirror wall): the foot is `e`

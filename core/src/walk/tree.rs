@@ -2679,15 +2679,7 @@ fn scaled_hit(
 }
 
 fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
-    let (ex, ey) = (
-        i128::from(b.x()) - i128::from(a.x()),
-        i128::from(b.y()) - i128::from(a.y()),
-    );
-    let (px, py) = (
-        i128::from(p.x()) - i128::from(a.x()),
-        i128::from(p.y()) - i128::from(a.y()),
-    );
-    Sign::of_i128(ex * py - ey * px)
+    Sign::of_i128(cross(diff(b, a), diff(p, a)))
 }
 
 /// Whether `a` lies exactly at θ = 0 but the perturbation puts it just below 2π.
@@ -2713,11 +2705,10 @@ fn cross(u: (i128, i128), v: (i128, i128)) -> i128 {
     u.0 * v.1 - u.1 * v.0
 }
 
+/// `p − e`, subtracted in 64 bits (query coordinates are at most 2⁵² in magnitude): the
+/// compiler then knows the values fit in 64 bits and multiplies them as such.
 fn diff(p: QueryPoint, e: QueryPoint) -> (i128, i128) {
-    (
-        i128::from(p.x()) - i128::from(e.x()),
-        i128::from(p.y()) - i128::from(e.y()),
-    )
+    (i128::from(p.x() - e.x()), i128::from(p.y() - e.y()))
 }
 
 /// Whether a ray tree looks past an object of `material` with `depth` levels left: always
