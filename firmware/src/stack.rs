@@ -85,12 +85,13 @@ pub fn report(
     let _ = writeln!(
         Uart,
         "vcx-firmware: size_of Angle {} B, ViewInterval {} B, Cylinder {} B, Vertex {} B, \
-         Arenas {} B, Ram {} B, Out {} B, FrameInterval {} B, TreeRam ({} frames) {} B, \
-         Frame ({} intervals) {} B",
+         Slots {} B, Arenas {} B, Ram {} B, Out {} B, FrameInterval {} B, \
+         TreeRam ({} frames) {} B, Frame ({} intervals) {} B",
         size_of::<vcx::geom::sos::Angle>(),
         size_of::<vcx::walk::ViewInterval>(),
         size_of::<vcx::partition::Cylinder>(),
         size_of::<vcx::partition::Vertex>(),
+        size_of::<vcx::partition::Slots>(),
         size_of::<crate::app::Arenas>(),
         size_of::<crate::app::Ram>(),
         size_of::<crate::app::Out>(),

@@ -12,7 +12,9 @@ use vcx::format::{
     self, decode, decode_into, encode, encode_into, Arena, CountProblem, EncodeOptions,
     FormatError, Header, Problem, SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX,
 };
-use vcx::partition::{build_by_sweep, BuildOptions, Complex, CylinderId, History, Wall};
+use vcx::partition::{
+    build_by_sweep, BuildOptions, Complex, CylinderId, History, Wall, ZERO_SLOTS,
+};
 use vcx::walk::{ray_tree, view};
 use vcx::{Eta, Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_tests::generators::compare_view;
@@ -453,7 +455,7 @@ fn decode_into_fixed_storage() {
     let (s, c, bytes) = small_file();
     let mut objects = [SceneObject::BLANK; 8];
     let mut points = [Point::default(); 32];
-    let mut open = [[None; 2]; Scratch::open_len(8)];
+    let mut open = [ZERO_SLOTS; Scratch::open_len(8)];
     let mut vertices = [BLANK_VERTEX; 64];
     let mut cylinders = [BLANK_CYLINDER; 256];
     let d = decode_into::<32, 8>(
@@ -894,7 +896,7 @@ fn decode_edited_as(
     // The same checks without allocation.
     let mut objects = [SceneObject::BLANK; 8];
     let mut points = [Point::default(); 32];
-    let mut open = [[None; 2]; Scratch::open_len(8)];
+    let mut open = [ZERO_SLOTS; Scratch::open_len(8)];
     let mut vs = [BLANK_VERTEX; 64];
     let mut cs = [BLANK_CYLINDER; 256];
     let scratch = Scratch {
@@ -1242,7 +1244,7 @@ fn decoded_slices_walk_like_the_owned_complex() {
     );
     let mut objects = vec![SceneObject::BLANK; n];
     let mut points = vec![Point::default(); nv];
-    let mut open = vec![[None; 2]; Scratch::open_len(n)];
+    let mut open = vec![ZERO_SLOTS; Scratch::open_len(n)];
     let mut vertices = vec![BLANK_VERTEX; v];
     let mut cylinders = vec![BLANK_CYLINDER; nc];
     let d = decode_into::<128, 32>(

@@ -729,7 +729,7 @@ fn tree_scratch_is_bounded() {
 fn region_file_decodes_into_kept_storage_without_allocating() {
     use vcx::format::{decode, decode_into, Header, SceneObject, Scratch};
     use vcx::format::{BLANK_CYLINDER, BLANK_VERTEX};
-    use vcx::partition::Region;
+    use vcx::partition::{Region, ZERO_SLOTS};
     let _g = lock();
     let f = generate(SceneKind::Grid, 32, 3).expect("grid");
     let s = f.scene.as_ref();
@@ -743,7 +743,7 @@ fn region_file_decodes_into_kept_storage_without_allocating() {
     let (n, nv) = (h.objects as usize, h.scene_vertices as usize);
     let mut objects = vec![SceneObject::BLANK; n];
     let mut points = vec![vcx::Point::default(); nv];
-    let mut open = vec![[None; 2]; Scratch::open_len(n)];
+    let mut open = vec![ZERO_SLOTS; Scratch::open_len(n)];
     let mut vertices = vec![BLANK_VERTEX; h.complex_vertices as usize];
     let mut cylinders = vec![BLANK_CYLINDER; h.cylinders as usize];
     let (k, counts) = allocations(|| {

@@ -17,7 +17,7 @@ use vcx::format::{
 };
 use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
 use vcx::partition::{
-    build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError, Slices,
+    build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError, Slices, ZERO_SLOTS,
 };
 use vcx::walk::{view, view_into, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
@@ -520,7 +520,7 @@ fn with_decoded<const V: usize, R>(
         Scratch {
             objects: &mut objects,
             points: &mut points,
-            open: &mut vec![[None; 2]; Scratch::open_len(n)],
+            open: &mut vec![ZERO_SLOTS; Scratch::open_len(n)],
         },
         &mut vertices,
         &mut cylinders,
@@ -723,7 +723,7 @@ fn v4_equals_pruned_v3(sr: &SceneRef<'_>, c: &Complex, r: Region) {
         Scratch {
             objects: &mut vec![SceneObject::BLANK; n],
             points: &mut vec![Point::default(); nv],
-            open: &mut vec![[None; 2]; Scratch::open_len(n)],
+            open: &mut vec![ZERO_SLOTS; Scratch::open_len(n)],
         },
         &mut vertices,
         &mut cylinders,

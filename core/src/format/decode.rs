@@ -566,15 +566,10 @@ fn replay_error(
             v,
             "a corner face it closes has no open cylinder",
         ),
-        ReplayError::Crowded(i) if stored(i) => (
+        ReplayError::Crowded(i) => (
             Arena::Cylinder,
             i,
             "a third cylinder at θ = 0 on its bottom or top chain",
-        ),
-        ReplayError::Crowded(i) => (
-            Arena::Vertex,
-            (i - initial) / 3,
-            "it opens a third cylinder on one chain",
         ),
         ReplayError::Unmatched(i) if stored(i) => (
             Arena::Cylinder,
@@ -1084,7 +1079,7 @@ pub fn decode(bytes: &[u8]) -> Result<Loaded, FormatError> {
     let mut cylinders = vec![BLANK_CYLINDER; header.cylinders as usize];
     let scene_ref = scene.as_ref();
     let mut open = if header.replays_cylinders() {
-        vec![[None; 2]; open_slots(scene_ref.len())]
+        vec![crate::partition::ZERO_SLOTS; open_slots(scene_ref.len())]
     } else {
         vec![]
     };

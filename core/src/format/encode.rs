@@ -499,7 +499,7 @@ pub fn encode_region(
     region: Region,
     options: &EncodeOptions,
 ) -> Result<alloc::vec::Vec<u8>, FormatError> {
-    use crate::partition::{open_slots, replay, Complex, BLANK_CYLINDER};
+    use crate::partition::{open_slots, replay, Complex, BLANK_CYLINDER, ZERO_SLOTS};
     if whole.region().is_some() {
         return Err(FormatError::NotEncodable(
             "encode_region needs the whole complex, not a pruned one",
@@ -516,7 +516,7 @@ pub fn encode_region(
         .collect();
     let initial = cylinders.len();
     cylinders.resize(initial + 3 * vertices.len(), BLANK_CYLINDER);
-    let mut open = alloc::vec![[None; 2]; open_slots(scene.len())];
+    let mut open = alloc::vec![ZERO_SLOTS; open_slots(scene.len())];
     replay(scene.len(), vertices, initial, &mut cylinders, &mut open)
         .map_err(|_| FormatError::NotEncodable("the complex does not replay"))?;
     let replayed = Complex::new_owned(vertices.to_vec(), cylinders, scene);

@@ -7,7 +7,7 @@
 //! rotational sweep ([`super::build_by_sweep`]) and the reader of a version-3 file (which
 //! stores only the vertices and the cylinders at θ = 0, `docs/format.md`) share this loop.
 //! It allocates nothing: the open cylinders are kept in a caller's slice of
-//! [`open_slots`] entries, two per chain (at a fixed θ at most two open cylinders share a
+//! [`open_slots`] entries, one per chain (at a fixed θ at most two open cylinders share a
 //! chain on one side: the layers before and after its object).
 //!
 //! **Streaming.** The loop reads its input through a [`Stream`] (vertices in θ order, the
@@ -15,13 +15,15 @@
 //! replay order, and the vertices a kept cylinder's wall names, renumbered in θ order:
 //! the numbering of [`Complex::prune_to_region`](super::Complex::prune_to_region), whose
 //! kept cylinders at θ = 0 come first because the replay numbers them first. An open
-//! cylinder lives in the open slots with the fields the loop reads, so the storage is the
-//! kept arenas and the slots, never the whole complex (the reader of a version-4 region
-//! file). Keeping everything is the sweep's partition ([`replay`]).
+//! cylinder lives in the open slots with the fields the loop reads (once, in its bottom
+//! chain's slot; its top chain's slot says where), so the storage is the kept arenas and
+//! the slots, never the whole complex (the reader of a version-4 region file). Keeping
+//! everything is the sweep's partition ([`replay`]).
 
 use super::{Cylinder, CylinderId, Vertex, VertexId, Wall};
-use crate::line_space::{Bound, Chain, Corner};
+use crate::line_space::{Bitangent, Bound, Chain, Corner};
 use crate::scene::ObjectId;
+use core::num::NonZeroU32;
 
 /// A placeholder cylinder for storage the replay fills.
 pub const BLANK: Cylinder = Cylinder {
@@ -60,12 +62,23 @@ impl Open {
     }
 }
 
-/// Two open cylinders per chain slot.
-pub type Slots = [Option<Open>; 2];
+/// One chain's open cylinders (at a fixed θ at most two share a chain on one side): the
+/// records of those whose bottom arc it is, and where the records of those whose top arc
+/// it is are, so that each record is stored once.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Slots {
+    by_bottom: [Option<Open>; 2],
+    by_top: [Option<Place>; 2],
+}
+
+/// Where an open cylinder's record is: record `k` of chain slot `s` is at position
+/// `2·s + k`, stored plus one so that `None` is all zero bytes.
+type Place = NonZeroU32;
 
 /// Slots whose bytes are all zero, for a `static` scratch of them to land in `.bss`
 /// rather than in `.data` with a flash image (`None` of an `Open` is a niche value of a
-/// chain's bound, not 0). The replay clears its slots before use, so any value will do.
+/// chain's bound, not 0). The replay clears its slots before use, so any value will do:
+/// these are the blank slots for any caller.
 pub const ZERO_SLOTS: Slots = {
     let chain = Some(Chain {
         object: ObjectId(0),
@@ -79,14 +92,16 @@ pub const ZERO_SLOTS: Slots = {
         bottom: chain,
         top: chain,
     };
-    [Some(zero); 2]
+    Slots {
+        by_bottom: [Some(zero); 2],
+        by_top: [None; 2],
+    }
 };
 
 /// Entries of the scratch slice [`replay`] needs for a scene of `objects` objects: one
-/// index by bottom chain and one by top chain, each with a slot per chain and one for "no
-/// chain" (the unbounded cylinders).
+/// per chain and one for "no chain" (the unbounded cylinders).
 pub const fn open_slots(objects: usize) -> usize {
-    2 * (2 * objects + 1)
+    2 * objects + 1
 }
 
 /// Why the vertices do not replay into a partition (a corrupt file, or a bug).
@@ -94,7 +109,8 @@ pub const fn open_slots(objects: usize) -> usize {
 pub(crate) enum ReplayError {
     /// Vertex `.0` closes a corner face that has no open cylinder.
     Lost(usize),
-    /// Cylinder `.0` would be a third open cylinder on one chain.
+    /// Cylinder `.0` at θ = 0 would be a third open cylinder on one chain (a vertex's
+    /// opened cylinders take the places of those it closes, so only these can crowd).
     Crowded(usize),
     /// Cylinder `.0` (replay order), at θ = 0 or open at θ = 2π, has no partner across
     /// the wall θ = 0.
@@ -131,40 +147,105 @@ fn chain_slot(chain: Option<Chain>, objects: usize) -> usize {
     }
 }
 
-/// The open cylinders by bottom chain and by top chain.
+/// The open cylinders, indexed by bottom chain and by top chain.
 struct OpenSet<'s> {
     objects: usize,
-    by_bottom: &'s mut [Slots],
-    by_top: &'s mut [Slots],
+    slots: &'s mut [Slots],
 }
 
 impl OpenSet<'_> {
+    /// The record at `position` (`2·slot + k`).
+    fn record(&self, position: usize) -> Option<&Open> {
+        self.slots
+            .get(position / 2)?
+            .by_bottom
+            .get(position % 2)?
+            .as_ref()
+    }
+
+    /// The open cylinder whose top arc (`by_top`) or bottom arc is `chain` and whose
+    /// floor and ceiling are `corner`'s at `b`, and its record's position. Inlined: three
+    /// calls per vertex, each with a constant `by_top`.
+    #[inline(always)]
+    fn find(
+        &self,
+        by_top: bool,
+        chain: Chain,
+        corner: Corner,
+        b: &Bitangent,
+    ) -> Option<(usize, Open)> {
+        let slot = chain_slot(Some(chain), self.objects);
+        let positions = match by_top {
+            true => self
+                .slots
+                .get(slot)?
+                .by_top
+                .map(|p| p.map(|p| p.get() as usize - 1)),
+            false => [Some(2 * slot), Some(2 * slot + 1)],
+        };
+        positions.into_iter().flatten().find_map(|p| {
+            let c = self.record(p)?;
+            corner.matches(b, c.floor, c.ceiling).then_some((p, *c))
+        })
+    }
+
+    /// Opens cylinder `c` at θ = 0.
     fn insert(&mut self, c: Open) -> Result<(), ReplayError> {
-        let n = self.objects;
-        for (index, chain) in [(&mut *self.by_bottom, c.bottom), (&mut *self.by_top, c.top)] {
-            let slots = index
-                .get_mut(chain_slot(chain, n))
-                .ok_or(ReplayError::Storage)?;
-            let free = slots
-                .iter_mut()
-                .find(|s| s.is_none())
-                .ok_or(ReplayError::Crowded(c.id.index()))?;
-            *free = Some(c);
-        }
+        let crowded = ReplayError::Crowded(c.id.index());
+        let slot = chain_slot(c.bottom, self.objects);
+        let (k, record) = self
+            .slots
+            .get_mut(slot)
+            .ok_or(ReplayError::Storage)?
+            .by_bottom
+            .iter_mut()
+            .enumerate()
+            .find(|(_, r)| r.is_none())
+            .ok_or(crowded)?;
+        *record = Some(c);
+        let place = place(2 * slot + k).ok_or(ReplayError::Storage)?;
+        let free = self
+            .slots
+            .get_mut(chain_slot(c.top, self.objects))
+            .ok_or(ReplayError::Storage)?
+            .by_top
+            .iter_mut()
+            .find(|p| p.is_none())
+            .ok_or(crowded)?;
+        *free = Some(place);
         Ok(())
     }
 
-    fn remove(&mut self, c: &Open) {
-        let n = self.objects;
-        for (index, chain) in [(&mut *self.by_bottom, c.bottom), (&mut *self.by_top, c.top)] {
-            if let Some(slots) = index.get_mut(chain_slot(chain, n)) {
-                slots
-                    .iter_mut()
-                    .filter(|s| s.is_some_and(|s| s.id == c.id))
-                    .for_each(|s| *s = None);
-            }
+    /// Puts `c` at `position`, in place of the closed cylinder whose record was there
+    /// (same bottom chain).
+    fn put(&mut self, position: usize, c: Open) {
+        if let Some(record) = self
+            .slots
+            .get_mut(position / 2)
+            .and_then(|s| s.by_bottom.get_mut(position % 2))
+        {
+            *record = Some(c);
         }
     }
+
+    /// Points `chain`'s reference to the record at `from` to the one at `to`.
+    fn repoint(&mut self, chain: Option<Chain>, from: usize, to: usize) {
+        let (Some(slots), Some(from), Some(to)) = (
+            self.slots.get_mut(chain_slot(chain, self.objects)),
+            place(from),
+            place(to),
+        ) else {
+            return;
+        };
+        if let Some(p) = slots.by_top.iter_mut().find(|p| **p == Some(from)) {
+            *p = Some(to);
+        }
+    }
+}
+
+/// The place of the record at `position`.
+fn place(position: usize) -> Option<Place> {
+    u32::try_from(position + 1).ok().and_then(Place::new)
 }
 
 /// A kept cylinder of the output.
@@ -209,17 +290,14 @@ pub(crate) fn replay_stream<S: Stream>(
     stream: &mut S,
     open: &mut [Slots],
 ) -> Result<(usize, usize), ReplayError> {
-    let (by_bottom, by_top) = open
+    let slots = open
         .get_mut(..open_slots(objects))
-        .ok_or(ReplayError::Storage)?
-        .split_at_mut(2 * objects + 1);
-    by_bottom.fill([None; 2]);
-    by_top.fill([None; 2]);
-    let mut open = OpenSet {
-        objects,
-        by_bottom,
-        by_top,
-    };
+        .ok_or(ReplayError::Storage)?;
+    slots.fill(Slots {
+        by_bottom: [None; 2],
+        by_top: [None; 2],
+    });
+    let mut open = OpenSet { objects, slots };
     let id_of = |i: usize| CylinderId::from_index(i).ok_or(ReplayError::Storage);
     // Every replay id fits (so `initial + 3·vi` below cannot overflow).
     vertices
@@ -258,27 +336,17 @@ pub(crate) fn replay_stream<S: Stream>(
         let [top, bottom, left, right] = Corner::wedges(&b);
 
         let lost = ReplayError::Lost(vi);
-        let find = |index: &[Slots], chain: Chain, corner: Corner| {
-            let slots = index.get(chain_slot(Some(chain), objects))?;
-            slots
-                .iter()
-                .flatten()
-                .copied()
-                .find(|c| corner.matches(&b, c.floor, c.ceiling))
-        };
         // Top wedge: bottom arc switches from Q's chain to P's.
-        let t = find(open.by_bottom, cq, top).ok_or(lost)?;
+        let (at_t, t) = open.find(false, cq, top, &b).ok_or(lost)?;
         // Bottom wedge: top arc switches from P's chain to Q's.
-        let d = find(open.by_top, cp, bottom).ok_or(lost)?;
+        let (at_d, d) = open.find(true, cp, bottom, &b).ok_or(lost)?;
         // Left wedge: between P's chain (below) and Q's (above); closes.
-        let l = find(open.by_bottom, cp, left)
-            .filter(|c| c.top == Some(cq))
+        let (at_l, l) = open
+            .find(false, cp, left, &b)
+            .filter(|(_, c)| c.top == Some(cq))
             .ok_or(lost)?;
-        if t.id == d.id || t.id == l.id || d.id == l.id {
+        if at_t == at_d || at_t == at_l || at_d == at_l {
             return Err(lost);
-        }
-        for c in [&t, &d, &l] {
-            open.remove(c);
         }
 
         // The right wedge's face, from the floors and ceilings just closed.
@@ -305,9 +373,10 @@ pub(crate) fn replay_stream<S: Stream>(
             c.kept = numbering.number(stream, first + k)?;
         }
         // The vertex is kept iff it is a wall of a kept cylinder: of one it closes or opens.
-        let wall = if [t, d, l, opened[0], opened[1], opened[2]]
+        let wall = if [t.kept, d.kept, l.kept]
             .iter()
-            .any(|c| c.kept.is_some())
+            .chain(opened.iter().map(|c| &c.kept))
+            .any(Option::is_some)
         {
             stream.put_vertex(kept_vertices, &v)?;
             let id = VertexId::from_index(kept_vertices).ok_or(ReplayError::Storage)?;
@@ -316,15 +385,19 @@ pub(crate) fn replay_stream<S: Stream>(
         } else {
             Wall::Zero
         };
-        let [o_t, o_d, o_r] = opened;
-        for (c, next) in [(t, o_t.kept), (d, o_d.kept), (l, None)] {
-            if let Some(new) = c.kept {
+        let [o_t, o_d, _] = &opened;
+        for (closed, next) in [(t.kept, o_t.kept), (d.kept, o_d.kept), (l.kept, None)] {
+            if let Some(new) = closed {
                 let c = output(stream, new)?;
                 c.right = wall;
                 c.right_neighbour = next;
             }
         }
-        for (c, previous) in [(o_t, t.kept), (o_d, d.kept), (o_r, None)] {
+        // The opened cylinders take the closed ones' places: o_t has l's bottom chain (P's),
+        // o_d d's, o_r t's (Q's); and o_t has t's top chain, o_d l's (Q's), o_r d's (P's).
+        let places = [at_l, at_d, at_t];
+        for ((c, previous), position) in opened.into_iter().zip([t.kept, d.kept, None]).zip(places)
+        {
             if let Some(new) = c.kept {
                 *output(stream, new)? = Cylinder {
                     left: wall,
@@ -332,7 +405,13 @@ pub(crate) fn replay_stream<S: Stream>(
                     ..c.cylinder()
                 };
             }
-            open.insert(c)?;
+            open.put(position, c);
+        }
+        for ((chain, from), to) in [(t.top, at_t), (l.top, at_l), (d.top, at_d)]
+            .into_iter()
+            .zip(places)
+        {
+            open.repoint(chain, from, to);
         }
     }
 
@@ -343,10 +422,11 @@ pub(crate) fn replay_stream<S: Stream>(
         let z = stream.initial(i)?;
         let z_kept = at_zero.number(stream, i)?;
         let c = open
-            .by_bottom
+            .slots
             .get_mut(chain_slot(z.bottom, objects))
             .and_then(|slots| {
                 slots
+                    .by_bottom
                     .iter_mut()
                     .find(|c| c.is_some_and(|c| c.floor == z.floor && c.ceiling == z.ceiling))
             })
@@ -359,7 +439,12 @@ pub(crate) fn replay_stream<S: Stream>(
             output(stream, new)?.left_neighbour = c.kept;
         }
     }
-    if let Some(c) = open.by_bottom.iter().flatten().flatten().next() {
+    if let Some(c) = open
+        .slots
+        .iter()
+        .flat_map(|s| s.by_bottom.iter().flatten())
+        .next()
+    {
         return Err(ReplayError::Unmatched(c.id.index()));
     }
     Ok((kept_vertices, numbering.next))

@@ -14,7 +14,7 @@
 
 use alloc::vec::Vec;
 
-use super::replay::{open_slots, replay, ReplayError, BLANK};
+use super::replay::{open_slots, replay, ReplayError, BLANK, ZERO_SLOTS};
 use super::{Complex, Cylinder, Vertex, Wall};
 use crate::geom::sos::Angle;
 use crate::line_space::{cross_section, free_bitangents};
@@ -60,7 +60,7 @@ pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
         .collect();
     let initial = cylinders.len();
     cylinders.resize(initial + 3 * vertices.len(), BLANK);
-    let mut open = alloc::vec![[None; 2]; open_slots(scene.len())];
+    let mut open = alloc::vec![ZERO_SLOTS; open_slots(scene.len())];
     replay(scene.len(), &vertices, initial, &mut cylinders, &mut open).map_err(|e| match e {
         ReplayError::Lost(vertex) => ComplexError::SweepLostCylinder { vertex },
         ReplayError::Crowded(_) | ReplayError::Unmatched(_) => ComplexError::SweepUnmatchedAtZero,
