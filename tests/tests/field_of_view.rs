@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use vcx::geom::predicates::Direction;
 use vcx::partition::build_by_sweep;
 use vcx::walk::view_range;
-use vcx::{Material, ObjectId, QueryPoint, SubScene};
+use vcx::{Material, ObjectId, QueryPoint, SceneRef, SubScene};
 use vcx_demo::generate::{generate, SceneKind};
 use vcx_tests::generators::{same_direction, written_vertex};
 use vcx_tests::reference::{self, Vec2};
@@ -88,6 +88,37 @@ fn restrict(full: &[reference::Interval<Option<ObjectId>>], from: &Vec2, to: &Ve
     rows
 }
 
+/// Compares `view_range` from `q` over `(from, to)` with the reference's full view
+/// restricted there.
+#[allow(clippy::too_many_arguments)]
+fn check(
+    c: &vcx::partition::Complex,
+    s: &SceneRef<'_>,
+    sub: &SubScene<'_>,
+    q: QueryPoint,
+    full: &[reference::Interval<Option<ObjectId>>],
+    from: Direction,
+    to: Direction,
+    what: &str,
+) {
+    let sr = sub.as_ref();
+    let want = restrict(full, &vec2(from), &vec2(to));
+    let got = view_range(c, &sr, q, from, to).unwrap();
+    let show =
+        || format!("{what} q {q:?} from {from:?} to {to:?}\n core {got:#?}\n want {want:#?}");
+    assert_eq!(got.len(), want.len(), "{}", show());
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g.object.and_then(|o| sub.original(o)), w.1, "{}", show());
+        assert!(same_direction(g.start.vector(), &w.0), "{}", show());
+        assert_eq!(
+            g.start_vertex.and_then(|k| written_vertex(s, k)),
+            w.2,
+            "{}",
+            show()
+        );
+    }
+}
+
 #[test]
 fn field_of_view_is_the_restriction_of_the_full_view() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -157,27 +188,80 @@ fn field_of_view_is_the_restriction_of_the_full_view() {
                     continue;
                 };
                 let to = if r == 0 { from } else { to };
-                let want = restrict(&full, &vec2(from), &vec2(to));
-                let got = view_range(&c, &sr, q, from, to).unwrap();
-                let show = || {
-                    format!(
-                        "{kind:?} q {q:?} from {from:?} to {to:?}\n core {got:#?}\n want {want:#?}"
-                    )
-                };
-                assert_eq!(got.len(), want.len(), "{}", show());
-                for (g, w) in got.iter().zip(&want) {
-                    assert_eq!(g.object.and_then(|o| sub.original(o)), w.1, "{}", show());
-                    assert!(same_direction(g.start.vector(), &w.0), "{}", show());
-                    assert_eq!(
-                        g.start_vertex.and_then(|k| written_vertex(&s, k)),
-                        w.2,
-                        "{}",
-                        show()
-                    );
-                }
+                check(&c, &s, &sub, q, &full, from, to, &format!("{kind:?}"));
                 compared += 1;
             }
         }
     }
     assert!(compared > 500, "{compared}");
+}
+
+/// Ranges that start or end exactly on the direction of a vertex (a boundary, or a ray
+/// along which a vertex lies that is not one) or exactly opposite it, of lengths that
+/// walk there from θ = 0 either way round.
+#[test]
+fn field_of_view_from_vertex_directions() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut compared = 0;
+    for (kind, n, seed) in [
+        (SceneKind::Grid, 16, 1),
+        (SceneKind::Mixed, 12, 3),
+        (SceneKind::Hall, 6, 4),
+    ] {
+        let file = generate(kind, n, seed).unwrap();
+        let s = file.scene.as_ref();
+        let keep = s
+            .objects()
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.material != Material::Screen)
+            .map(|(i, _)| ObjectId(i as u32));
+        let sub = SubScene::new(s, keep);
+        let c = build_by_sweep(&sub.as_ref()).unwrap();
+        let verts = s.vertices();
+        for k in 0..6 {
+            // On the line through two vertices every other time.
+            let (a, b) = (
+                verts[rng.gen_range(0..verts.len())],
+                verts[rng.gen_range(0..verts.len())],
+            );
+            let t = if k % 2 == 0 {
+                rng.gen_range(1i64..=9)
+            } else {
+                rng.gen_range(-2i64..=3) * 16
+            };
+            let Some(q) = QueryPoint::from_raw(
+                (i64::from(a.x()) << 16) + t * (i64::from(b.x()) - i64::from(a.x())) * 4096,
+                (i64::from(a.y()) << 16) + t * (i64::from(b.y()) - i64::from(a.y())) * 4096,
+            ) else {
+                continue;
+            };
+            let Ok(full) = reference::view(s, &Vec2::from_query(q)) else {
+                continue;
+            };
+            for v in verts {
+                let v = v.to_query();
+                let Some(d) = Direction::new(v.x() - q.x(), v.y() - q.y()) else {
+                    continue;
+                };
+                let turn = |d: Direction, a: i64, b: i64| {
+                    Direction::new(a * d.x - b * d.y, b * d.x + a * d.y)
+                };
+                for from in [d, Direction::new(-d.x, -d.y).unwrap()] {
+                    let ranges = [
+                        turn(from, 0, 1),
+                        turn(from, 8, 1),
+                        turn(from, -1, 1),
+                        turn(from, -8, -1),
+                    ];
+                    for to in ranges.into_iter().flatten() {
+                        check(&c, &s, &sub, q, &full, from, to, &format!("{kind:?}"));
+                        check(&c, &s, &sub, q, &full, to, from, &format!("{kind:?}"));
+                        compared += 2;
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared > 2000, "{compared}");
 }

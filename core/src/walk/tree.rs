@@ -2683,7 +2683,7 @@ fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
 }
 
 /// Whether `a` lies exactly at θ = 0 but the perturbation puts it just below 2π.
-fn wraps(a: &Angle) -> bool {
+pub(super) fn wraps(a: &Angle) -> bool {
     a.is_exactly_zero()
         && a.cmp_angle(&Angle::constant(Direction { x: 1, y: -1 })) == Ordering::Greater
 }

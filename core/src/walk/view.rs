@@ -4,11 +4,12 @@
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
-use super::{Anchor, WalkError, Walker, VIEW_TANGENT_CACHE};
+use super::tree::wraps;
+use super::{Anchor, Position, WalkError, Walker, VIEW_TANGENT_CACHE};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
-use crate::partition::{Complex, Storage};
+use crate::partition::{Complex, CylinderId, Storage};
 use crate::scene::{ObjectId, SceneRef};
 
 /// One interval of a view: directions from `start` (inclusive of nothing: boundaries are
@@ -72,7 +73,7 @@ pub fn view_into<S: Storage>(
 
 /// The view from `q` restricted to the directions counter-clockwise from `from` to `to`
 /// (a field of view; `from == to` is the full circle starting at `from`), written into
-/// `out` like [`view_into`] (which needs [`view_capacity`] intervals, as this does):
+/// `out` like [`view_into`] (a buffer of [`view_capacity`] intervals always suffices):
 /// the first interval starts at `from` — its `start_vertex` is `None` unless a boundary
 /// of the full view lies exactly on `from` — and the others are the full view's boundaries
 /// strictly inside the range, in order from `from`; a boundary exactly on `to` is left
@@ -81,8 +82,11 @@ pub fn view_into<S: Storage>(
 /// ends with that interval from its own start (when that is not `from`): one more
 /// interval than the full view, which [`view_capacity`] leaves room for.
 ///
-/// Cost: the full walk (the walk starts at θ = 0, where the start cylinder is found without
-/// point location); starting at `from` needs point location in a history.
+/// Cost: the walk over the range plus the walk to its start, from θ = 0 either way round
+/// (the start cylinder is found at θ = 0 without point location), or the full walk where
+/// that adds up to three quarters of a turn or more: at most about one full walk. A range
+/// from exactly θ = 0, whose boundary merges the events the perturbation puts just below
+/// 2π (the last of a walk from θ = 0), is restricted from the full view.
 pub fn view_range_into<S: Storage>(
     complex: &Complex<S>,
     scene: &SceneRef<'_>,
@@ -91,9 +95,77 @@ pub fn view_range_into<S: Storage>(
     to: Direction,
     out: &mut [ViewInterval],
 ) -> Result<usize, WalkError> {
+    use core::f64::consts::TAU;
+    let (f, t) = (Angle::constant(from), Angle::constant(to));
+    // The walk to choose, by its length in `f64` (the output is exact either way): past
+    // three quarters of a turn, two walks (the second from a cold tangent cache) cost
+    // more than the full one (measured on the n = 1024 grid).
+    let (a, b) = (f.radians(), t.radians());
+    let range = if t.cmp_exact(&f) == Ordering::Greater {
+        b - a
+    } else {
+        TAU - a + b
+    };
+    if f.is_exactly_zero() || 0.75 * TAU <= range + a.min(TAU - a) {
+        return restrict(complex, scene, q, (f, t), out);
+    }
+    let start = complex.trace_start(scene, q)?;
+    let begin = if a <= TAU - a {
+        (start, Angle::ZERO)
+    } else {
+        back_to(complex, scene, q, start, &f)?
+    };
+    let mut sink = SliceSink { out, len: 0 };
+    sweep_range(complex, scene, q, begin, (f, t), &mut sink)?;
+    Ok(sink.len)
+}
+
+/// Where a counter-clockwise walk to `f` (not exactly θ = 0) starts when it comes from
+/// 2π: a clockwise walk from the θ = 0 cylinder `start` down to the first step exactly
+/// before `f`, which it leaves undone: the cylinder it would leave, and the angle where
+/// it was entered counter-clockwise (the walk continues strictly after it). Every step
+/// exactly on `f` lies ahead, so [`sweep_range`] sees the boundary on `f` whole. Steps
+/// exactly at θ = 0 that the perturbation puts just below 2π lie above `f`.
+fn back_to<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    start: CylinderId,
+    f: &Angle,
+) -> Result<(CylinderId, Angle), WalkError> {
+    let end = Position {
+        lap: 1,
+        angle: Angle::ZERO,
+    };
+    let mut walker =
+        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, start, Angle::ZERO, Some(end), false);
+    let mut cur = start;
+    loop {
+        let lap = walker.lap();
+        let Some(s) = walker.next_step_in::<S, false>(complex, scene)? else {
+            break;
+        };
+        // The step onto the next lap crosses the permanent wall into θ = 2π.
+        if walker.lap() == lap && !wraps(&s.angle) && s.angle.cmp_exact(f) == Ordering::Less {
+            return Ok((cur, s.angle));
+        }
+        cur = s.cylinder;
+    }
+    // Nothing lies between θ = 0 and `f`.
+    Ok((start, Angle::ZERO))
+}
+
+/// [`view_range_into`] restricting the full view: the containing interval and the
+/// boundaries inside the range, found exactly in the full view written into `out`.
+fn restrict<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    (f, t): (Angle, Angle),
+    out: &mut [ViewInterval],
+) -> Result<usize, WalkError> {
     let n = view_into(complex, scene, q, out)?;
     let view = out.get_mut(..n).unwrap_or_default();
-    let (f, t) = (Angle::constant(from), Angle::constant(to));
     // Counter-clockwise order from `f`: (lap, angle), lap 1 for directions before `f`.
     let lap = |a: &Angle| u8::from(a.cmp_exact(&f) == Ordering::Less);
     let key_t = if t.cmp_exact(&f) == Ordering::Greater {
@@ -323,6 +395,100 @@ fn sweep<S: Storage>(
         })?;
     }
     Ok(())
+}
+
+/// The view over the range `(f, t)` (`f` not exactly θ = 0) from one walk that starts in
+/// `cylinder` at `theta` on lap 0 before `f`: at θ = 0, or where [`back_to`] leaves it.
+/// Positions are exact on the circle unwrapped from θ = 0, `(lap, angle)`: lap 1 is past
+/// θ = 2π, and holds
+/// the events exactly at θ = 0 that the perturbation puts just below 2π, so that they form
+/// one cluster with those just above (as the full view's first cluster, `Z` then `P`).
+/// Events before `f` only change the object seen; clusters from `f` up to `t` (excluded)
+/// are written as [`sweep`] writes them, the interval at `f` first.
+fn sweep_range<S: Storage>(
+    complex: &Complex<S>,
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    (cylinder, theta): (CylinderId, Angle),
+    (f, t): (Angle, Angle),
+    out: &mut impl Sink,
+) -> Result<(), WalkError> {
+    let t_lap = u8::from(t.cmp_exact(&f) != Ordering::Greater);
+    let cmp = |(l, a): (u8, &Angle), (m, b): (u8, &Angle)| l.cmp(&m).then_with(|| a.cmp_exact(b));
+    // The range ends within a lap past `f`: two laps from θ = 0 bound the walk.
+    let end = Position {
+        lap: 2,
+        angle: Angle::ZERO,
+    };
+    let mut walker =
+        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, cylinder, theta, Some(end), true);
+    let mut seen = complex.ceiling(cylinder);
+    // The interval at `f` is still to be written.
+    let mut first = true;
+    let mut current: Option<(u8, Cluster)> = None;
+    while let Some(s) = walker.next_step_in::<S, true>(complex, scene)? {
+        let (Some(v), true) = (s.vertex, s.ahead) else {
+            continue;
+        };
+        let lap = walker.lap() + u8::from(wraps(&s.angle));
+        let ceiling = complex.ceiling(s.cylinder);
+        if cmp((lap, &s.angle), (0, &f)) == Ordering::Less {
+            seen = ceiling;
+            continue;
+        }
+        if cmp((lap, &s.angle), (t_lap, &t)) != Ordering::Less {
+            break;
+        }
+        match &mut current {
+            Some((l, c)) if *l == lap && c.angle.cmp_exact(&s.angle) == Ordering::Equal => {
+                c.after = ceiling;
+                c.single = false;
+            }
+            _ => {
+                if let Some((_, c)) = current.take() {
+                    emit_from(scene, q, &c, &f, (&mut seen, &mut first), out)?;
+                }
+                let event = Cluster {
+                    angle: s.angle,
+                    vertex: v,
+                    after: ceiling,
+                    single: true,
+                };
+                current = Some((lap, event));
+            }
+        }
+    }
+    if let Some((_, c)) = current {
+        emit_from(scene, q, &c, &f, (&mut seen, &mut first), out)?;
+    }
+    if first {
+        out.push(ViewInterval {
+            start: f,
+            object: seen,
+            start_vertex: None,
+        })?;
+    }
+    Ok(())
+}
+
+/// [`emit`] for a cluster of a range walk at or after `f`, writing the interval at `f`
+/// first (while `first`): a boundary exactly on `f` starts it, else `f` itself does.
+fn emit_from(
+    scene: &SceneRef<'_>,
+    q: QueryPoint,
+    c: &Cluster,
+    f: &Angle,
+    (seen, first): (&mut Option<ObjectId>, &mut bool),
+    out: &mut impl Sink,
+) -> Result<(), WalkError> {
+    if core::mem::take(first) && (c.angle.cmp_exact(f) != Ordering::Equal || c.after == *seen) {
+        out.push(ViewInterval {
+            start: *f,
+            object: *seen,
+            start_vertex: None,
+        })?;
+    }
+    emit(scene, q, c, seen, out)
 }
 
 /// Writes the boundary of a cluster if the object seen changes there.

@@ -1160,8 +1160,9 @@ fn fig_frame_rate(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
              {FRAME_WIDTH} columns looking along the circuit with a 90° field of view: \
              per-column hits and exact coverage (`vcx::render`, as `vcx bench views --fov 90 \
              --width {FRAME_WIDTH}`). The walk is the full circle either way (the field-of-view \
-             restriction, `walk::view_range`, walks everything). {} passes; each frame's time \
-             is its median over the passes; frames/s = frames ÷ summed times.",
+             restriction, `walk::view_range`, would walk to its edge and over it). {} \
+             passes; each frame's time is its median over the passes; frames/s = frames ÷ \
+             summed times.",
             s.passes
         ),
         table: Table {
