@@ -119,6 +119,16 @@ fn check(
     }
 }
 
+/// The objects of `s` that are not screens (a primary view looks through screens).
+fn not_screens(s: &SceneRef<'_>) -> Vec<ObjectId> {
+    s.objects()
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| o.material != Material::Screen)
+        .map(|(i, _)| ObjectId(i as u32))
+        .collect()
+}
+
 #[test]
 fn field_of_view_is_the_restriction_of_the_full_view() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -132,13 +142,7 @@ fn field_of_view_is_the_restriction_of_the_full_view() {
     ] {
         let file = generate(kind, n, seed).unwrap();
         let s = file.scene.as_ref();
-        let keep = s
-            .objects()
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| o.material != Material::Screen)
-            .map(|(i, _)| ObjectId(i as u32));
-        let sub = SubScene::new(s, keep);
+        let sub = SubScene::new(s, not_screens(&s));
         let sr = sub.as_ref();
         let c = build_by_sweep(&sr).unwrap();
         let verts = s.vertices();
@@ -210,13 +214,7 @@ fn field_of_view_from_vertex_directions() {
     ] {
         let file = generate(kind, n, seed).unwrap();
         let s = file.scene.as_ref();
-        let keep = s
-            .objects()
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| o.material != Material::Screen)
-            .map(|(i, _)| ObjectId(i as u32));
-        let sub = SubScene::new(s, keep);
+        let sub = SubScene::new(s, not_screens(&s));
         let c = build_by_sweep(&sub.as_ref()).unwrap();
         let verts = s.vertices();
         for k in 0..6 {
