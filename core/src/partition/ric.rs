@@ -45,9 +45,11 @@
 //!
 //! **Events.** Between events the chain changes only locally, so after an event it is
 //! rebuilt from the first cylinder that changed and spliced back onto the unchanged rest
-//! ([`History::chain_up`]). The bitangents of N with each object met are computed once
-//! per insertion, grouped by the pair of chains they join (an event search reads only the
-//! group that can fit). The replacement intervals derived from the chain carry the chain
+//! ([`History::chain_up`]); only the rebuilt middle is checked for cylinders entering or
+//! leaving the conflict region. An end cylinder's first crossing with N's chain is kept
+//! until the end changes or θ reaches it (θ only grows). The bitangents of N with each
+//! object met are computed once per insertion, grouped by the pair of chains they join (an
+//! event search reads only the group that can fit). The replacement intervals derived from the chain carry the chain
 //! indices they cover, so each chain cylinder is linked to exactly the intervals over it;
 //! where an event leaves their shapes as they were, the open intervals stay as they are
 //! (no sort, no merge with the open set).
@@ -750,11 +752,12 @@ impl History {
     /// Whether an entry's left wall lies at or before θ.
     #[inline]
     fn entry_at_or_before(&self, scene: &SceneRef<'_>, e: &Entry, theta: &Key) -> bool {
-        if e.vertex == ZERO_WALL {
-            return true;
-        }
+        // A valid key is never 0 (the key of θ = 0), so it decides alone.
         if e.key != 0 && theta.dir.fast && e.key != theta.dir.key {
             return e.key < theta.dir.key;
+        }
+        if e.vertex == ZERO_WALL {
+            return true;
         }
         if theta.vertex.is_some_and(|v| v.0 == e.vertex) {
             return true;
@@ -764,12 +767,16 @@ impl History {
     }
 
     /// Order of two entries by left wall: θ = 0 first.
+    #[inline]
     fn cmp_entries(&self, scene: &SceneRef<'_>, a: &Entry, b: &Entry) -> Ordering {
+        // Valid keys decide alone (never 0, the key of θ = 0).
+        if a.key != 0 && b.key != 0 && a.key != b.key {
+            return a.key.cmp(&b.key);
+        }
         match (a.vertex == ZERO_WALL, b.vertex == ZERO_WALL) {
             (true, true) => Ordering::Equal,
             (true, false) => Ordering::Less,
             (false, true) => Ordering::Greater,
-            (false, false) if a.key != 0 && b.key != 0 && a.key != b.key => a.key.cmp(&b.key),
             (false, false) => self.cmp_vertices(scene, VertexId(a.vertex), VertexId(b.vertex)),
         }
     }
@@ -1506,7 +1513,8 @@ impl History {
         out.clear();
         let r = self.chain_into(scene, s, restart, theta, event, &mut out);
         s.next = out;
-        r
+        s.splice = r?;
+        Some(())
     }
 
     fn chain_into(
@@ -1517,17 +1525,27 @@ impl History {
         theta: &Key,
         event: Option<&Bitangent>,
         out: &mut Vec<CylinderId>,
-    ) -> Option<()> {
+    ) -> Option<Splice> {
         let n = s.n;
         // The index of a cylinder in the current chain, if it may start the spliced tail.
         let tail = |c: CylinderId| {
             s.position(c)
                 .filter(|&p| p >= restart.tail_from && s.chain.get(p) == Some(&c))
         };
-        let mut cur = if restart.keep == 0 {
+        let keep = restart.keep;
+        let untailed = |out: &Vec<CylinderId>| Splice {
+            keep,
+            old_tail: s.chain.len(),
+            new_tail: out.len(),
+        };
+        let mut cur = if keep == 0 {
             if let Some(p) = tail(restart.fresh) {
                 out.extend_from_slice(s.chain.get(p..)?);
-                return Some(());
+                return Some(Splice {
+                    keep,
+                    old_tail: p,
+                    new_tail: 0,
+                });
             }
             out.push(restart.fresh);
             restart.fresh
@@ -1539,10 +1557,12 @@ impl History {
         let top_n = ranked(scene, tangent_vertex(scene, n, angle, Bound::Upper));
         for _ in 0..self.cylinders.len() {
             let c = self.cylinders.get(cur.index())?;
-            let Some(top) = c.top else { return Some(()) };
+            let Some(top) = c.top else {
+                return Some(untailed(out));
+            };
             let h = ranked(scene, tangent_vertex(scene, top.object, angle, top.bound));
             if angle.offset_cmp_after(top_n, h) == Sign::Positive {
-                return Some(());
+                return Some(untailed(out));
             }
             // The order of N and the arc's object matters only for a lower arc, whose
             // tangent vertex `h` is then the first one `n_after` tries.
@@ -1552,8 +1572,13 @@ impl History {
             });
             cur = self.across(scene, top, Side::Above, layer, theta)?;
             if let Some(p) = tail(cur) {
+                let new_tail = out.len();
                 out.extend_from_slice(s.chain.get(p..)?);
-                return Some(());
+                return Some(Splice {
+                    keep,
+                    old_tail: p,
+                    new_tail,
+                });
             }
             out.push(cur);
         }
@@ -1572,9 +1597,25 @@ impl History {
             (s.chain.first().copied(), Bound::Lower),
             (s.chain.last().copied(), Bound::Upper),
         ];
-        // The bitangents of N with the arcs' objects, computed once per insertion.
-        for (id, _) in ends {
-            let Some(c) = id.and_then(|id| self.cylinders.get(id.index())) else {
+        // An end's first crossing after θ is kept while the end stays and θ has not
+        // reached it: θ only grows, and no candidate of the end lies between the θ it was
+        // found at and itself.
+        let mut stale = [false; 2];
+        for (e, &(id, _)) in ends.iter().enumerate() {
+            let Some(id) = id else { continue };
+            // Whether θ may have reached a kept crossing (keys that do not decide: yes).
+            let reached = |(x, _): &Candidate| {
+                theta.is_some_and(|t| fast_order(&x.0, &t.dir) != Some(Ordering::Greater))
+            };
+            let kept = s.crossings.get(e).copied().flatten();
+            let kept =
+                kept.is_some_and(|(c, first)| c == id && !first.as_ref().is_some_and(reached));
+            if kept {
+                continue;
+            }
+            stale[e] = true;
+            // The bitangents of N with the arcs' objects, computed once per insertion.
+            let Some(c) = self.cylinders.get(id.index()) else {
                 continue;
             };
             for arc in [c.bottom, c.top].into_iter().flatten() {
@@ -1583,13 +1624,13 @@ impl History {
         }
         // Candidates are compared by their integer keys; the perturbed angle is built
         // only for exact ties.
-        let s = &*s;
+        let sr = &*s;
         let angle = |src: Src| match src {
             Src::Vertex(v) => self
                 .vertices
                 .get(v.index())
                 .map(|x| x.bitangent.angle(scene)),
-            Src::Pool(i) => s.pool.get(i).map(|x| x.1.angle),
+            Src::Pool(i) => sr.pool.get(i).map(|x| x.1.angle),
         };
         let cmp = |(da, a): (Dir, Src), (db, b): (Dir, Src)| -> Ordering {
             if let (Src::Vertex(x), Src::Vertex(y)) = (a, b) {
@@ -1614,14 +1655,13 @@ impl History {
                     == Ordering::Greater
             })
         };
-        let mut best: Option<((Dir, Src), Event)> = None;
         // Most comparisons are decided by the keys alone: that test is inlined, the rest
         // (ties, parallel vectors) goes through `cmp` and `after`.
         let less = |c: &(Dir, Src), b: &(Dir, Src)| match fast_order(&c.0, &b.0) {
             Some(o) => o == Ordering::Less,
             None => cmp(*c, *b) == Ordering::Less,
         };
-        let better = |c: (Dir, Src), best: &Option<((Dir, Src), Event)>| {
+        let better = |c: (Dir, Src), best: &Option<Candidate>| {
             best.as_ref().is_none_or(|(b, _)| less(&c, b))
                 && theta.is_none_or(|t| match fast_order(&c.0, &t.dir) {
                     Some(o) => o == Ordering::Greater,
@@ -1630,8 +1670,48 @@ impl History {
         };
         let vertex = |v: VertexId| self.dirs.get(v.index()).map(|&d| (d, Src::Vertex(v)));
         let theta_dir = theta.map(|t| &t.dir);
-        for &id in &s.chain {
+        // The first crossing after θ of N's `bound` chain with an arc of end cylinder `id`,
+        // before its right wall.
+        let first_crossing = |id: CylinderId, bound: Bound| {
+            let c = self.cylinders.get(id.index())?;
+            let right = match c.right {
+                Wall::Vertex(v) => vertex(v),
+                Wall::Zero => None,
+            };
+            let mut first: Option<Candidate> = None;
+            for (arc, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
+                let Some(arc) = arc else { continue };
+                // Only bitangents from N's `bound` chain to the arc's chain fit.
+                let range = sr.cached(arc.object, fit_index(bound, arc.bound));
+                for i in range {
+                    let Some((b, a)) = sr.pool.get(i) else { break };
+                    let cand = (a.dir, Src::Pool(i));
+                    let before_right = right.as_ref().is_none_or(|r| {
+                        fast_order(&cand.0, &r.0).map_or_else(|| less(&cand, r), Ordering::is_lt)
+                    });
+                    let first_dir = first.as_ref().map(|b| &b.0 .0);
+                    if before_right
+                        && fast_better(&cand.0, first_dir, theta_dir)
+                            .unwrap_or_else(|| better(cand, &first))
+                    {
+                        let event = Event::Cross {
+                            bitangent: *b,
+                            lower: bound == Bound::Lower,
+                            exit: (arc, side),
+                        };
+                        first = Some((cand, event));
+                    }
+                }
+            }
+            first
+        };
+        let mut best: Option<Candidate> = None;
+        for &id in &sr.chain {
             if let Wall::Vertex(w) = self.cylinders[id.index()].right {
+                // Chain cylinders often share a right wall: the best already.
+                if matches!(best, Some((_, Event::Wall(b))) if b == w) {
+                    continue;
+                }
                 if let Some(c) = vertex(w) {
                     let best_dir = best.as_ref().map(|b| &b.0 .0);
                     if fast_better(&c.0, best_dir, theta_dir).unwrap_or_else(|| better(c, &best)) {
@@ -1640,45 +1720,27 @@ impl History {
                 }
             }
         }
-        for (id, bound) in ends {
-            let Some(c) = id.and_then(|id| self.cylinders.get(id.index())) else {
+        let mut crossings = sr.crossings;
+        for (e, &(id, bound)) in ends.iter().enumerate() {
+            let (Some(id), Some(slot)) = (id, crossings.get_mut(e)) else {
                 continue;
             };
-            let right = match c.right {
-                Wall::Vertex(v) => vertex(v),
-                Wall::Zero => None,
-            };
-            for (arc, side) in [(c.bottom, Side::Below), (c.top, Side::Above)] {
-                let Some(arc) = arc else { continue };
-                // Only bitangents from N's `bound` chain to the arc's chain fit.
-                let range = s.cached(arc.object, fit_index(bound, arc.bound));
-                for i in range {
-                    let Some((b, a)) = s.pool.get(i) else { break };
-                    let cand = (a.dir, Src::Pool(i));
-                    let before_right = right.as_ref().is_none_or(|r| {
-                        fast_order(&cand.0, &r.0).map_or_else(|| less(&cand, r), Ordering::is_lt)
-                    });
-                    let best_dir = best.as_ref().map(|b| &b.0 .0);
-                    if before_right
-                        && fast_better(&cand.0, best_dir, theta_dir)
-                            .unwrap_or_else(|| better(cand, &best))
-                    {
-                        let event = Event::Cross {
-                            bitangent: *b,
-                            lower: bound == Bound::Lower,
-                            exit: (arc, side),
-                        };
-                        best = Some((cand, event));
-                    }
+            if stale.get(e) == Some(&true) {
+                *slot = Some((id, first_crossing(id, bound)));
+            }
+            if let Some((_, Some(first))) = *slot {
+                if best.as_ref().is_none_or(|(b, _)| less(&first.0, b)) {
+                    best = Some(first);
                 }
             }
         }
-        let ((_, src), event) = best?;
-        let key = match src {
-            Src::Vertex(v) => self.vertex_key(scene, v)?,
-            Src::Pool(i) => s.pool.get(i)?.1,
+        let key = match best {
+            Some(((_, Src::Vertex(v)), _)) => self.vertex_key(scene, v),
+            Some(((_, Src::Pool(i)), _)) => sr.pool.get(i).map(|x| x.1),
+            None => None,
         };
-        Some((key, event))
+        s.crossings = crossings;
+        Some((key?, best?.1))
     }
 
     /// Closes the replacement intervals of `s.open` that the derived intervals no longer
@@ -1697,49 +1759,47 @@ impl History {
         let old = core::mem::take(&mut s.open);
         let mut open = core::mem::take(&mut s.spare_open);
         open.clear();
-        let (mut i, mut j) = (0, 0);
-        for _ in 0..old.len() + s.shapes.len() {
-            let sn = s.shapes.get(j).map(|e| e.0);
-            let id = match (old.get(i), sn) {
-                (Some(&(so, id)), Some(sn)) if so == sn => {
-                    i += 1;
-                    id
-                }
-                (Some(&(_, id)), None) => {
-                    self.cylinders[id.index()].right = wall;
-                    s.closers.push(id);
-                    i += 1;
-                    continue;
-                }
-                (Some(&(so, id)), Some(sn)) if so < sn => {
-                    self.cylinders[id.index()].right = wall;
-                    s.closers.push(id);
-                    i += 1;
-                    continue;
-                }
-                (_, Some(sn)) => {
+        let by_shape = core::mem::take(&mut s.shapes);
+        let mut old_rest = old.iter().peekable();
+        let mut shapes = by_shape.iter().peekable();
+        while let Some(&&(sn, _)) = shapes.peek() {
+            // Old intervals before this shape are gone.
+            while let Some(&(_, id)) = old_rest.next_if(|o| o.0 < sn) {
+                self.close(s, id, wall);
+            }
+            let id = match old_rest.next_if(|o| o.0 == sn) {
+                Some(&(_, id)) => id,
+                None => {
                     let id = self.push(Cylinder::new(sn, wall))?;
                     s.created.push(id);
                     s.openers.push(id);
                     id
                 }
-                (None, None) => break,
             };
-            // Every derived interval of this shape is this cylinder.
-            let Some(sn) = sn else { break };
             open.push((sn, id));
-            let group = s.shapes.get(j..).unwrap_or(&[]);
-            let group = group.get(..group.iter().take_while(|e| e.0 == sn).count());
-            for &(_, k) in group.unwrap_or(&[]) {
+            // Every derived interval of this shape is this cylinder.
+            while let Some(&(_, k)) = shapes.next_if(|e| e.0 == sn) {
                 if let Some(r) = s.run_id.get_mut(k as usize) {
                     *r = id;
                 }
-                j += 1;
             }
         }
+        for &(_, id) in old_rest {
+            self.close(s, id, wall);
+        }
+        s.shapes = by_shape;
         s.open = open;
         s.spare_open = old;
         Ok(())
+    }
+
+    /// Closes replacement interval `id` at `wall`.
+    #[inline]
+    fn close(&mut self, s: &mut Scratch, id: CylinderId, wall: Wall) {
+        if let Some(c) = self.cylinders.get_mut(id.index()) {
+            c.right = wall;
+        }
+        s.closers.push(id);
     }
 
     /// Moves the insertion to the chain `s.next` after an event at `wall`.
@@ -1760,21 +1820,31 @@ impl History {
         }
         // Old cylinders entering or leaving the conflict region between their walls keep
         // their geometry outside it, as new cylinders with a new wall.
+        // Only the middles of the chains differ (`Splice`): their cylinders are stamped.
+        let Splice {
+            keep,
+            old_tail,
+            new_tail,
+        } = s.splice;
         let stamp = s.next_stamp();
-        for k in 0..s.chain_dense.len() {
-            if let Some(st) = s.chain_dense.get(k).and_then(|&i| s.dense.get_mut(i)) {
+        for &i in s.chain_dense.get(keep..old_tail).unwrap_or(&[]) {
+            if let Some(st) = s.dense.get_mut(i) {
                 st.before = stamp;
             }
         }
         // The dense indices of the next chain, kept for `record_children`.
         s.next_dense.clear();
-        for k in 0..s.next.len() {
+        s.next_dense
+            .extend_from_slice(s.chain_dense.get(..keep).unwrap_or(&[]));
+        for k in keep..new_tail {
             let i = s.state_index(s.next[k]);
             s.dense[i].after = stamp;
             s.next_dense.push(i);
         }
+        s.next_dense
+            .extend_from_slice(s.chain_dense.get(old_tail..).unwrap_or(&[]));
         s.diff.clear();
-        for k in 0..s.next.len() {
+        for k in keep..new_tail {
             if s.dense[s.next_dense[k]].before != stamp {
                 s.diff.push(s.next[k]);
             }
@@ -1808,7 +1878,7 @@ impl History {
             s.closers.push(piece);
         }
         s.diff.clear();
-        for k in 0..s.chain.len() {
+        for k in keep..old_tail.min(s.chain.len()) {
             if s.dense[s.chain_dense[k]].after != stamp {
                 s.diff.push(s.chain[k]);
             }
@@ -2192,6 +2262,16 @@ struct Restart {
     tail_from: usize,
 }
 
+/// How the chain after an event is made of the current one: `next[..keep]` is
+/// `chain[..keep]`, `next[new_tail..]` is `chain[old_tail..]`, and only the middles
+/// `chain[keep..old_tail]` and `next[keep..new_tail]` differ.
+#[derive(Clone, Copy, Debug, Default)]
+struct Splice {
+    keep: usize,
+    old_tail: usize,
+    new_tail: usize,
+}
+
 /// What one insertion knows about a conflict cylinder.
 #[derive(Clone, Copy, Debug)]
 struct Old {
@@ -2206,8 +2286,8 @@ struct Old {
     last_piece: Option<CylinderId>,
     /// The last children recorded (to skip repeats cheaply): as many as the intervals
     /// that can cover one chain cylinder (below or above N, and an `(F, N)` and an
-    /// `(N, G)` run).
-    recent: [Option<CylinderId>; 4],
+    /// `(N, G)` run). [`CylinderId::ZERO`], the root, is never a child: it stands for none.
+    recent: [CylinderId; 4],
     /// Index in the current chain (valid when `generation` is the scratch's).
     pos: u32,
     generation: u32,
@@ -2223,6 +2303,8 @@ struct Scratch {
     chain_dense: Vec<usize>,
     /// The chain after the current event.
     next: Vec<CylinderId>,
+    /// How `next` is spliced from `chain`.
+    splice: Splice,
     /// Replacement intervals open at the current θ, sorted by shape.
     open: Vec<(Shape, CylinderId)>,
     spare_open: Vec<(Shape, CylinderId)>,
@@ -2274,6 +2356,9 @@ struct Scratch {
     pool: Vec<(Bitangent, Key)>,
     /// The bitangents of N and one object, before grouping into `pool`.
     found: Vec<(Bitangent, Key)>,
+    /// Per end of the chain (bottom, top): the end cylinder and its first crossing after
+    /// the θ it was found at ([`History::next_event`]).
+    crossings: [Option<(CylinderId, Option<Candidate>)>; 2],
     insertion: u32,
 }
 
@@ -2302,6 +2387,7 @@ impl Scratch {
             self.sparse.resize(nodes, 0);
         }
         self.pool.clear();
+        self.crossings = [None; 2];
         if self.bt_of.len() < objects {
             self.bt_of.resize(objects, (0, [0; 5]));
         }
@@ -2361,7 +2447,7 @@ impl Scratch {
                     first_piece: None,
                     remainder: None,
                     last_piece: None,
-                    recent: [None; 4],
+                    recent: [CylinderId::ZERO; 4],
                     pos: 0,
                     generation: 0,
                 });
@@ -2431,24 +2517,17 @@ impl Scratch {
                 st.generation = generation;
             }
         }
-        for r in 0..self.derived.len() {
-            let (_, lo, hi) = self.derived[r];
-            let Some(&id) = self.run_id.get(r) else {
-                break;
-            };
+        for (&(_, lo, hi), &id) in self.derived.iter().zip(&self.run_id) {
             // The chain indices `lo..=hi` (an exclusive range: cheaper to walk).
             let end = hi.saturating_add(1).min(self.chain_dense.len());
-            for j in lo..end {
-                let Some(&i) = self.chain_dense.get(j) else {
-                    break;
-                };
+            for &i in self.chain_dense.get(lo..end).unwrap_or(&[]) {
                 let Some(st) = self.dense.get_mut(i) else {
                     break;
                 };
-                if st.recent.contains(&Some(id)) {
+                if st.recent.contains(&id) {
                     continue;
                 }
-                st.recent = [Some(id), st.recent[0], st.recent[1], st.recent[2]];
+                st.recent = [id, st.recent[0], st.recent[1], st.recent[2]];
                 self.links.push((i as u32, id));
             }
         }
@@ -2464,6 +2543,9 @@ fn fit_index(n: Bound, other: Bound) -> usize {
     };
     2 * k(n) + k(other)
 }
+
+/// A candidate event: its direction, where its angle comes from, and the event.
+type Candidate = ((Dir, Src), Event);
 
 /// Where a candidate event's angle comes from.
 #[derive(Clone, Copy, Debug)]
@@ -2601,18 +2683,19 @@ fn derive(
     // fields (up to the first id not in the arena, which ends the runs as if the chain
     // ended there). Packing is injective, so runs compare packed fields.
     rows.clear();
+    // (Fields fit 32 bits: object ids stay below 2³⁰.)
     rows.extend(chain.iter().map_while(get).map(|c| {
         (
-            Shape::object(c.floor),
-            Shape::object(c.ceiling),
-            Shape::chain(c.top),
+            Shape::object(c.floor) as u32,
+            Shape::object(c.ceiling) as u32,
+            Shape::chain(c.top) as u32,
         )
     }));
     let complete = rows.len() == k;
     let (nf, lower, upper) = (
-        Shape::object(Some(n)),
-        Shape::chain(lower),
-        Shape::chain(upper),
+        Shape::object(Some(n)) as u32,
+        Shape::chain(lower) as u32,
+        Shape::chain(upper) as u32,
     );
     // Runs of equal floor give (F, N); runs of equal ceiling give (N, G).
     for before in [true, false] {
@@ -2624,7 +2707,8 @@ fn derive(
             if next.is_none_or(|m| key(m) != key(c)) {
                 let end = if next.is_some() { c.2 } else { upper };
                 let (f, g) = if before { (key(c), nf) } else { (nf, key(c)) };
-                out.push((Shape::of_fields(f, g, start, end), from, j));
+                let shape = Shape::of_fields(f.into(), g.into(), start.into(), end.into());
+                out.push((shape, from, j));
                 start = c.2;
                 from = j + 1;
             }
@@ -2637,7 +2721,7 @@ fn derive(
 
 /// A chain cylinder's floor, ceiling and top arc as packed [`Shape`] fields, as
 /// [`derive`] reads them.
-type Row = (u128, u128, u128);
+type Row = (u32, u32, u32);
 
 #[cfg(test)]
 mod tests {
