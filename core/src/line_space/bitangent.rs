@@ -127,29 +127,76 @@ pub(crate) fn chain_bitangent(
         Bound::Upper => Sign::Negative,
     };
     let (want_p, want_q) = (sign(p.bound), sign(flip(q.bound)));
-    // Vertex k of a polygon (cyclically) with its rank.
-    let at = |v: &[Point], first: usize, k: usize| {
-        let k = k % v.len().max(1);
-        v.get(k).map(|&pt| RankedPoint::vertex(pt, first + k))
+    // Vertex k of a polygon with its rank, and its two neighbours (cyclically, without a
+    // division: this runs for every pair of vertices).
+    let around = |v: &[Point], first: usize, k: usize| {
+        let prev = k.checked_sub(1).unwrap_or(v.len().saturating_sub(1));
+        let next = if k + 1 < v.len() { k + 1 } else { 0 };
+        let at = |i: usize| v.get(i).map(|&pt| RankedPoint::vertex(pt, first + i));
+        Some((at(prev)?, at(k)?, at(next)?))
     };
     for a in 0..pv.len() {
-        let (pa, pprev, pnext) = (
-            at(pv, fp, a)?,
-            at(pv, fp, a + pv.len() - 1)?,
-            at(pv, fp, a + 1)?,
-        );
+        let (pprev, pa, pnext) = around(pv, fp, a)?;
         for b in 0..qv.len() {
-            let qb = at(qv, fq, b)?;
-            if sos::orient(pa, qb, pprev) != want_p || sos::orient(pa, qb, pnext) != want_p {
+            let qb = RankedPoint::vertex(*qv.get(b)?, fq + b);
+            let w = difference(pa, qb);
+            if orient_along(w, pa, qb, pprev) != want_p || orient_along(w, pa, qb, pnext) != want_p
+            {
                 continue;
             }
-            let (qprev, qnext) = (at(qv, fq, b + qv.len() - 1)?, at(qv, fq, b + 1)?);
-            if sos::orient(qb, pa, qprev) == want_q && sos::orient(qb, pa, qnext) == want_q {
+            let (qprev, _, qnext) = around(qv, fq, b)?;
+            let w = (-w.0, -w.1);
+            if orient_along(w, qb, pa, qprev) == want_q && orient_along(w, qb, pa, qnext) == want_q
+            {
                 return Some((fp + a, fq + b));
             }
         }
     }
     None
+}
+
+/// `b − a` on the scene grid (`|raw| < 2³⁰`, so each component is below 2³¹).
+#[cfg(feature = "alloc")]
+#[inline(always)]
+fn difference(a: sos::RankedPoint, b: sos::RankedPoint) -> (i64, i64) {
+    (
+        i64::from(b.point.x()) - i64::from(a.point.x()),
+        i64::from(b.point.y()) - i64::from(a.point.y()),
+    )
+}
+
+/// [`sos::orient`]`(a, b, c)` given `w = b − a` (the inner loop of [`chain_bitangent`]
+/// shares it between two tests): the exact sign of `cross(w, c − a)` (products below 2⁶²,
+/// exact in `i64`), the perturbed predicate only where it is zero. With `naive-f64`,
+/// `sos::orient` itself, as every predicate.
+#[cfg(feature = "alloc")]
+#[inline(always)]
+fn orient_along(
+    w: (i64, i64),
+    a: sos::RankedPoint,
+    b: sos::RankedPoint,
+    c: sos::RankedPoint,
+) -> Sign {
+    #[cfg(not(feature = "naive-f64"))]
+    {
+        let e = difference(a, c);
+        match Sign::of_i64(w.0 * e.1 - w.1 * e.0) {
+            Sign::Zero => {}
+            s => return s,
+        }
+    }
+    #[cfg(feature = "naive-f64")]
+    let _ = w;
+    orient_tie(a, b, c)
+}
+
+/// [`sos::orient`] out of line: reached only for exactly collinear triples (and with
+/// `naive-f64`), and inlined it would crowd the registers of the inner loop.
+#[cfg(feature = "alloc")]
+#[cold]
+#[inline(never)]
+fn orient_tie(a: sos::RankedPoint, b: sos::RankedPoint, c: sos::RankedPoint) -> Sign {
+    sos::orient(a, b, c)
 }
 
 fn flip(b: Bound) -> Bound {

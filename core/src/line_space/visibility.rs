@@ -21,9 +21,10 @@
 //!   wedge of that vertex) or lives until its candidate, which is then the next vertex.
 //!   A candidate not after the cylinder's left wall lies beyond θ = 2π: the cylinder is
 //!   still open at the end of the sweep.
-//! * So the next vertex after θ is the earliest candidate among the open cylinders: pop
-//!   it, close and open cylinders exactly as `build_by_sweep` does (closing takes a
-//!   cylinder's candidate out of the heap), push the candidates of the new cylinders.
+//! * So the next vertex after θ is the earliest candidate among the open cylinders: take
+//!   it, close and open cylinders exactly as `build_by_sweep` does; the three cylinders
+//!   opened take the slots of the three closed, and their candidates replace the closed
+//!   ones' in the heap (one sift each instead of a removal and an insertion).
 //!
 //! Open cylinders are indexed by chain: at any θ a chain has at most two cylinders above
 //! it and two below (one layer on the side where its object is not crossed, the layers
@@ -89,184 +90,245 @@ pub(crate) fn free_bitangents_brute_force(scene: &SceneRef<'_>) -> Vec<Bitangent
 /// No cylinder in a chain slot; no heap position.
 const EMPTY: u32 = u32::MAX;
 
-/// The pinch candidate of the cylinder in slot `cylinder`: the directed bitangent through
-/// `p`, then `q`.
+/// A pinch candidate's direction as the heap compares it: the half-plane of θ and the
+/// direction vector on the scene grid. Bit budget: scene coordinates have `|raw| < 2³⁰`
+/// ([`Point`](crate::geom::Point) enforces it), so differences fit `i32` (`< 2³¹`),
+/// products `< 2⁶²` and their difference `< 2⁶³`: exact in `i64`.
 #[derive(Clone, Copy, Debug)]
-struct Event {
-    p: RankedPoint,
-    q: RankedPoint,
-    cylinder: u32,
+struct Key {
+    dx: i32,
+    dy: i32,
     /// Whether θ lies in `[0, π)` (perturbed).
     upper: bool,
 }
 
-impl Event {
-    fn new(scene: &SceneRef<'_>, p: usize, q: usize, cylinder: u32) -> Event {
-        let (p, q) = (super::ranked(scene, p), super::ranked(scene, q));
-        // The half-plane test of `cmp_angle`: the perturbed sign of dot((0, 1), q − p),
-        // never zero for distinct vertices.
-        let upper = match sos::along(Direction { x: 0, y: 1 }, p, q) {
-            Sign::Positive => true,
-            Sign::Negative => false,
-            Sign::Zero => q.point.x() > p.point.x(),
-        };
-        Event {
-            p,
-            q,
-            cylinder,
-            upper,
+impl Key {
+    /// [`Angle::cmp_angle`] of the two directions where the exact test decides it: the
+    /// half-plane, then the sign of the cross product. `None` for exactly parallel
+    /// directions, which only the perturbed comparison orders.
+    #[inline(always)]
+    fn cmp_exact(&self, other: &Key) -> Option<Ordering> {
+        if self.upper != other.upper {
+            return Some(if self.upper {
+                Ordering::Less
+            } else {
+                Ordering::Greater
+            });
         }
+        let cross =
+            i64::from(self.dx) * i64::from(other.dy) - i64::from(self.dy) * i64::from(other.dx);
+        match cross.cmp(&0) {
+            Ordering::Greater => Some(Ordering::Less),
+            Ordering::Less => Some(Ordering::Greater),
+            Ordering::Equal => None,
+        }
+    }
+}
+
+/// A pinch candidate: the directed bitangent through `p`, then `q`.
+#[derive(Clone, Copy, Debug)]
+struct Event {
+    p: RankedPoint,
+    q: RankedPoint,
+    key: Key,
+}
+
+impl Event {
+    /// `None` only for coordinates out of the scene range (never for a valid scene).
+    fn new(scene: &SceneRef<'_>, p: usize, q: usize) -> Option<Event> {
+        let (p, q) = (super::ranked(scene, p), super::ranked(scene, q));
+        let d = |a: i32, b: i32| i32::try_from(i64::from(b) - i64::from(a)).ok();
+        let (dx, dy) = (d(p.point.x(), q.point.x())?, d(p.point.y(), q.point.y())?);
+        // The half-plane test of `cmp_angle`: the perturbed sign of dot((0, 1), q − p),
+        // the sign of `dy` unless it is zero; never zero for distinct vertices.
+        let upper = match dy.cmp(&0) {
+            Ordering::Greater => true,
+            Ordering::Less => false,
+            Ordering::Equal => match sos::along(Direction { x: 0, y: 1 }, p, q) {
+                Sign::Positive => true,
+                Sign::Negative => false,
+                Sign::Zero => q.point.x() > p.point.x(),
+            },
+        };
+        let key = Key { dx, dy, upper };
+        Some(Event { p, q, key })
     }
 
     fn angle(&self) -> Angle {
         Angle::of_pair(self.p, self.q)
     }
 
-    /// [`Angle::cmp_angle`] of the two directions, fast path first: the same half-plane
-    /// test, then the exact cross product of the scene-grid differences; only exactly
-    /// parallel directions go to the perturbed comparison. Bit budget: scene coordinates
-    /// have `|raw| < 2³⁰` ([`Point`](crate::geom::Point) enforces it), so differences are
-    /// `< 2³¹`, products `< 2⁶²` and their difference `< 2⁶³`: exact in `i64`.
+    /// [`Angle::cmp_angle`] of the two directions, the exact test first; only exactly
+    /// parallel directions go to the perturbed comparison.
     fn cmp_direction(&self, other: &Event) -> Ordering {
-        if self.upper != other.upper {
-            return if self.upper {
-                Ordering::Less
-            } else {
-                Ordering::Greater
-            };
-        }
-        let d = |e: &Event| {
-            (
-                i64::from(e.q.point.x()) - i64::from(e.p.point.x()),
-                i64::from(e.q.point.y()) - i64::from(e.p.point.y()),
-            )
-        };
-        let ((ux, uy), (vx, vy)) = (d(self), d(other));
-        match (ux * vy - uy * vx).cmp(&0) {
-            Ordering::Greater => Ordering::Less,
-            Ordering::Less => Ordering::Greater,
-            Ordering::Equal => self.angle().cmp_angle(&other.angle()),
-        }
+        self.key
+            .cmp_exact(&other.key)
+            .unwrap_or_else(|| self.angle().cmp_angle(&other.angle()))
     }
+}
 
-    /// Queue order: θ, then the slot (a total order; equal θ means the same bitangent).
-    fn before(&self, other: &Event) -> bool {
-        self.cmp_direction(other)
-            .then(self.cylinder.cmp(&other.cylinder))
-            == Ordering::Less
-    }
+/// A queued candidate: its direction and its cylinder slot (16 bytes, so that sifting
+/// touches only the heap array).
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    key: Key,
+    cylinder: u32,
 }
 
 /// The pinch candidates of the open cylinders: a binary min-heap indexed by cylinder slot,
-/// so that a cylinder closed before its pinch takes its candidate out.
+/// so that the cylinder opened in a slot replaces the candidate of the one closed there.
 ///
-/// Only live candidates are stored (at most one per open cylinder, about 3n + 1), so the
-/// heap stays small and in cache. (Lazy deletion would keep the ~2V candidates of
-/// cylinders closed by a vertex on their arcs; a heap or bucket queue of that size spends
-/// its time in cache misses: measured 2–3× slower on the grid scene.)
+/// Only live candidates are stored (at most one per slot, about 3n + 1), so the heap
+/// stays small and in cache. (Lazy deletion would keep the ~2V candidates of cylinders
+/// closed by a vertex on their arcs; a heap or bucket queue of that size spends its time
+/// in cache misses: measured 2–3× slower on the grid scene.)
 #[derive(Debug, Default)]
 struct Heap {
-    events: Vec<Event>,
-    /// Per cylinder slot: its candidate's index in `events`, or `EMPTY`.
+    entries: Vec<Entry>,
+    /// Per cylinder slot: its candidate's index in `entries`, or `EMPTY`.
     position: Vec<u32>,
+    /// Per cylinder slot: its candidate, for exactly parallel keys.
+    events: Vec<Option<Event>>,
+}
+
+/// Queue order: θ, then the slot (a total order; equal θ means the same bitangent).
+/// `events`: the candidates by slot, for exactly parallel keys.
+#[inline(always)]
+fn before(events: &[Option<Event>], a: &Entry, b: &Entry) -> bool {
+    match a.key.cmp_exact(&b.key) {
+        Some(o) => o == Ordering::Less,
+        None => before_parallel(events, a, b),
+    }
+}
+
+/// [`before`] for exactly parallel keys (rare; out of line so that the sifting loops keep
+/// their registers).
+#[cold]
+#[inline(never)]
+fn before_parallel(events: &[Option<Event>], a: &Entry, b: &Entry) -> bool {
+    let event = |e: &Entry| events.get(e.cylinder as usize).copied().flatten();
+    let theta = match (event(a), event(b)) {
+        (Some(x), Some(y)) => x.angle().cmp_angle(&y.angle()),
+        _ => Ordering::Equal,
+    };
+    theta.then(a.cylinder.cmp(&b.cylinder)) == Ordering::Less
+}
+
+/// Puts `e` at index `i` of the heap and records its position.
+#[inline(always)]
+fn place(entries: &mut [Entry], position: &mut [u32], i: usize, e: Entry) {
+    if let Some(slot) = entries.get_mut(i) {
+        *slot = e;
+    }
+    if let Some(p) = position.get_mut(e.cylinder as usize) {
+        *p = i as u32;
+    }
 }
 
 impl Heap {
-    fn set_position(&mut self, i: usize) {
-        if let Some(e) = self.events.get(i) {
-            if let Some(p) = self.position.get_mut(e.cylinder as usize) {
-                *p = i as u32;
-            }
-        }
-    }
-
-    fn before(&self, i: usize, j: usize) -> bool {
-        match (self.events.get(i), self.events.get(j)) {
-            (Some(a), Some(b)) => a.before(b),
-            _ => false,
-        }
-    }
-
-    fn swap(&mut self, i: usize, j: usize) {
-        if i < self.events.len() && j < self.events.len() {
-            self.events.swap(i, j);
-            self.set_position(i);
-            self.set_position(j);
-        }
-    }
-
-    /// Moves entry `i` up while it comes before its parent (≤ log₂ len steps).
-    fn sift_up(&mut self, mut i: usize) {
+    /// Moves entry `i` up while it comes before its parent (≤ log₂ len steps), moving the
+    /// parents down into the hole; returns its new index.
+    fn sift_up(&mut self, mut i: usize) -> usize {
+        let Heap {
+            entries,
+            position,
+            events,
+        } = self;
+        let Some(&e) = entries.get(i) else {
+            return i;
+        };
         while i > 0 {
             let parent = (i - 1) / 2;
-            if !self.before(i, parent) {
-                break;
+            match entries.get(parent) {
+                Some(&p) if before(events, &e, &p) => {
+                    place(entries, position, i, p);
+                    i = parent;
+                }
+                _ => break,
             }
-            self.swap(i, parent);
-            i = parent;
+        }
+        place(entries, position, i, e);
+        i
+    }
+
+    /// Restores the heap order around entry `i`, whose key changed.
+    fn sift(&mut self, i: usize) {
+        if self.sift_up(i) == i {
+            self.sift_down(i);
         }
     }
 
-    /// Moves entry `i` down while a child comes before it (≤ log₂ len steps).
+    /// Moves entry `i` down while a child comes before it (≤ log₂ len steps), moving the
+    /// children up into the hole.
     fn sift_down(&mut self, mut i: usize) {
+        let Heap {
+            entries,
+            position,
+            events,
+        } = self;
+        let Some(&e) = entries.get(i) else {
+            return;
+        };
         loop {
-            let (l, r) = (2 * i + 1, 2 * i + 2);
-            let mut first = i;
-            if l < self.events.len() && self.before(l, first) {
-                first = l;
-            }
-            if r < self.events.len() && self.before(r, first) {
-                first = r;
-            }
-            if first == i {
+            let l = 2 * i + 1;
+            let Some(&left) = entries.get(l) else {
+                break;
+            };
+            let (c, child) = match entries.get(l + 1) {
+                Some(&right) if before(events, &right, &left) => (l + 1, right),
+                _ => (l, left),
+            };
+            if !before(events, &child, &e) {
                 break;
             }
-            self.swap(i, first);
-            i = first;
+            place(entries, position, i, child);
+            i = c;
         }
+        place(entries, position, i, e);
     }
 
-    /// Inserts the candidate of a cylinder that has none.
-    fn push(&mut self, e: Event) -> Option<()> {
-        let slot = e.cylinder as usize;
-        if self.position.len() <= slot {
-            self.position.resize(slot + 1, EMPTY);
+    /// Sets the candidate of cylinder slot `slot` (`None`: none), replacing the one there.
+    fn set(&mut self, slot: u32, event: Option<Event>) -> Option<()> {
+        let s = slot as usize;
+        if self.position.len() <= s {
+            self.position.resize(s + 1, EMPTY);
+            self.events.resize(s + 1, None);
         }
-        if self.position.get(slot).copied() != Some(EMPTY) {
-            return None;
+        *self.events.get_mut(s)? = event;
+        let i = *self.position.get(s)?;
+        match (i, event) {
+            (EMPTY, None) => {}
+            (EMPTY, Some(e)) => {
+                let i = self.entries.len();
+                u32::try_from(i).ok().filter(|&i| i != EMPTY)?;
+                self.entries.push(Entry {
+                    key: e.key,
+                    cylinder: slot,
+                });
+                self.sift_up(i);
+            }
+            (i, Some(e)) => {
+                let i = i as usize;
+                self.entries.get_mut(i)?.key = e.key;
+                self.sift(i);
+            }
+            (i, None) => {
+                let i = i as usize;
+                *self.position.get_mut(s)? = EMPTY;
+                let last = self.entries.pop()?;
+                if i < self.entries.len() {
+                    place(&mut self.entries, &mut self.position, i, last);
+                    self.sift(i);
+                }
+            }
         }
-        let i = self.events.len();
-        u32::try_from(i).ok().filter(|&i| i != EMPTY)?;
-        self.events.push(e);
-        self.set_position(i);
-        self.sift_up(i);
         Some(())
     }
 
-    /// Takes out the candidate of cylinder slot `slot`, if any.
-    fn remove(&mut self, slot: usize) -> Option<Event> {
-        let i = *self.position.get(slot)?;
-        if i == EMPTY {
-            return None;
-        }
-        let i = i as usize;
-        let last = self.events.len().checked_sub(1)?;
-        self.swap(i, last);
-        let e = self.events.pop()?;
-        if let Some(p) = self.position.get_mut(slot) {
-            *p = EMPTY;
-        }
-        if i < self.events.len() {
-            self.sift_down(i);
-            self.sift_up(i);
-        }
-        Some(e)
-    }
-
-    /// Takes out the earliest candidate.
-    fn pop(&mut self) -> Option<Event> {
-        let slot = self.events.first()?.cylinder as usize;
-        self.remove(slot)
+    /// The earliest candidate and its cylinder slot.
+    fn first(&self) -> Option<(u32, Event)> {
+        let slot = self.entries.first()?.cylinder;
+        Some((slot, (*self.events.get(slot as usize)?)?))
     }
 }
 
@@ -316,11 +378,11 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         // At most 8 directed bitangents per pair of objects, each found once (θ grows).
         let most = n.saturating_mul(n.saturating_sub(1)).saturating_mul(4);
         let mut out: Vec<Bitangent> = Vec::new();
-        while let Some(event) = k.heap.pop() {
+        while let Some((cylinder, event)) = k.heap.first() {
             if out.len() >= most {
                 return None;
             }
-            let vertex = k.vertex(&event)?;
+            let vertex = k.vertex(cylinder, &event)?;
             out.push(vertex);
         }
         // θ = 2π: the cross-section is the one at θ = 0 again.
@@ -337,7 +399,8 @@ impl<'s, 'a> Kinetic<'s, 'a> {
     }
 
     /// Opens a cylinder and queues its pinch candidate if that comes after `after` (the
-    /// vertex at its left wall; `None`: θ = 0).
+    /// vertex at its left wall; `None`: θ = 0), in place of the candidate of the cylinder
+    /// closed in its slot.
     fn open_cylinder(&mut self, c: Interval, after: Option<&Event>) -> Option<()> {
         let id = match self.free.last() {
             Some(&id) => id,
@@ -367,21 +430,23 @@ impl<'s, 'a> Kinetic<'s, 'a> {
             Some(_) => *self.cylinders.get_mut(id as usize)? = slot,
             None => self.cylinders.push(slot),
         }
+        let mut candidate = None;
         if let (Some(bottom), Some(top)) = (c.bottom, c.top) {
             if let Some((p, q)) = chain_bitangent(self.scene, bottom, top) {
-                let e = Event::new(self.scene, p, q, id);
+                let e = Event::new(self.scene, p, q)?;
                 let later = match after {
                     Some(v) => e.cmp_direction(v) == Ordering::Greater,
                     None => e.angle().cmp_angle(&Angle::ZERO) == Ordering::Greater,
                 };
-                if later {
-                    self.heap.push(e)?;
-                }
+                candidate = later.then_some(e);
             }
         }
-        Some(())
+        self.heap.set(id, candidate)
     }
 
+    /// Closes a cylinder. Its candidate stays queued until the cylinder opened in its slot
+    /// replaces it: a vertex closes three cylinders and opens three in the same slots (the
+    /// free list is a stack), and a stale candidate that surfaced would fail `vertex`.
     fn close(&mut self, id: usize) -> Option<Interval> {
         let slot = self.cylinders.get_mut(id)?;
         if !slot.open {
@@ -390,7 +455,6 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         slot.open = false;
         let c = slot.interval;
         self.free.push(u32::try_from(id).ok()?);
-        self.heap.remove(id);
         for (chain, index) in [(c.bottom, &mut self.by_bottom), (c.top, &mut self.by_top)] {
             let Some(chain) = chain else { continue };
             let slots = index.get_mut(chain_index(chain))?;
@@ -408,21 +472,24 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         } else {
             &self.by_bottom
         };
-        index
-            .get(chain_index(chain))?
-            .iter()
-            .filter(|&&s| s != EMPTY)
-            .filter_map(|&s| Some((s as usize, self.cylinders.get(s as usize)?.interval)))
-            .filter(|(_, c)| corner.matches(b, c.floor, c.ceiling))
-            .min_by_key(|(_, c)| (c.floor, c.ceiling))
-            .map(|(s, _)| s)
+        let [x, y] = *index.get(chain_index(chain))?;
+        let face = |s: u32| {
+            let c = self.cylinders.get(s as usize)?.interval;
+            corner
+                .matches(b, c.floor, c.ceiling)
+                .then_some((s as usize, (c.floor, c.ceiling)))
+        };
+        match (face(x), face(y)) {
+            (Some(x), Some(y)) => Some(if y.1 < x.1 { y.0 } else { x.0 }),
+            (x, y) => x.or(y).map(|f| f.0),
+        }
     }
 
     /// Processes the vertex of a pinch candidate as `build_by_sweep` does: closes its top,
     /// bottom and left wedges (the last is the candidate's cylinder) and opens the three
     /// cylinders right of it.
-    fn vertex(&mut self, event: &Event) -> Option<Bitangent> {
-        let left_id = event.cylinder as usize;
+    fn vertex(&mut self, cylinder: u32, event: &Event) -> Option<Bitangent> {
+        let left_id = cylinder as usize;
         let left = self.cylinders.get(left_id).filter(|c| c.open)?.interval;
         let (cp, cq) = (left.bottom?, left.top?);
         let b = Bitangent {

@@ -294,21 +294,25 @@ impl<'a> BordersRef<'a> {
         // serve as cursors and end up shifted by one slot), shift back. The two slots of
         // the θ = 0 index follow the tilings. Slots past the last object's (corrupt ids)
         // are skipped.
+        // Each cylinder's (at most four) slots are computed once, kept in its `start` entry
+        // (free until the merge below) between the two passes.
         let tilings = 12 * scene.len();
         let zero_slot = tilings;
         offsets.fill(0);
-        for c in cylinders {
-            for s in arcs(c).filter(|&s| s < tilings) {
+        for (c, kept) in cylinders.iter().zip(start.iter_mut()) {
+            // A cylinder at θ = 0 goes in both slots of the index (the second one's
+            // contents are replaced by the tree maxima).
+            let zero = (c.left == Wall::Zero).then_some([zero_slot, zero_slot + 1]);
+            let slots = arcs(c)
+                .filter(|&s| s < tilings)
+                .chain(zero.into_iter().flatten());
+            let kept = kept.as_flattened_mut();
+            kept.fill(u32::MAX);
+            for (s, k) in slots.zip(kept.iter_mut()) {
                 if let Some(n) = offsets.get_mut(s + 1) {
                     *n += 1;
                 }
-            }
-            if c.left == Wall::Zero {
-                for s in [zero_slot, zero_slot + 1] {
-                    if let Some(n) = offsets.get_mut(s + 1) {
-                        *n += 1;
-                    }
-                }
+                *k = s as u32;
             }
         }
         let mut sum = 0u32;
@@ -316,18 +320,12 @@ impl<'a> BordersRef<'a> {
             sum = sum.saturating_add(*o);
             *o = sum;
         }
-        for (i, c) in cylinders.iter().enumerate() {
+        for (i, kept) in start.iter().enumerate() {
             let Some(id) = CylinderId::from_index(i) else {
                 break;
             };
-            // A cylinder at θ = 0 goes in both slots of the index (the second one's
-            // contents are replaced by the tree maxima).
-            let zero = (c.left == Wall::Zero).then_some([zero_slot, zero_slot + 1]);
-            for s in arcs(c)
-                .filter(|&s| s < tilings)
-                .chain(zero.into_iter().flatten())
-            {
-                if let Some(cursor) = offsets.get_mut(s) {
+            for s in kept.as_flattened().iter().take_while(|&&s| s != u32::MAX) {
+                if let Some(cursor) = offsets.get_mut(*s as usize) {
                     if let Some(slot) = ids.get_mut(*cursor as usize) {
                         *slot = id;
                     }
@@ -343,9 +341,13 @@ impl<'a> BordersRef<'a> {
         // Vertices are sorted by θ (an invariant `validate` checks), so a wall's position in
         // θ is its vertex index, θ = 0 first: sorting and merging compare integers.
         let left = |id: &CylinderId| cylinders.get(id.index()).map_or(0, |c| wall_rank(c.left));
-        for k in 0..tilings {
-            if let Some(list) = range(offsets, k).and_then(|r| ids.get_mut(r)) {
-                list.sort_unstable_by_key(left);
+        // Cylinders numbered in left-wall order (the replay's numbering: θ = 0 first, then
+        // three per vertex in θ order) were placed into every tiling already sorted.
+        if !cylinders.is_sorted_by_key(|c| wall_rank(c.left)) {
+            for k in 0..tilings {
+                if let Some(list) = range(offsets, k).and_then(|r| ids.get_mut(r)) {
+                    list.sort_unstable_by_key(left);
+                }
             }
         }
         let (zero, maxima) = match (range(offsets, zero_slot), range(offsets, zero_slot + 1)) {
