@@ -283,7 +283,10 @@ impl Camera {
             }
             None => {
                 let radians = iv.start_radians();
-                let d = (libm::cos(radians), libm::sin(radians));
+                // One argument reduction for both (`sincos` gives the bits of `sin` and
+                // `cos`: the same kernels on the same reduced argument).
+                let (sin, cos) = libm::sincos(radians);
+                let d = (cos, sin);
                 if d.0 * self.forward.0 + d.1 * self.forward.1 <= 0.0 {
                     return None;
                 }
@@ -830,10 +833,14 @@ pub fn clip_polygon(
     origin: (f64, f64),
     dir: (f64, f64),
 ) -> Option<(f64, usize, f64, usize)> {
-    let n = poly.len();
     let (mut t_in, mut e_in, mut t_out, mut e_out) = (f64::NEG_INFINITY, 0, f64::INFINITY, 0);
+    // Edge `k` runs from vertex `k` to the next (the last back to the first): each vertex
+    // is converted once, carried from one edge to the next.
+    let n = poly.len();
+    let mut b = poly.first().map_or((0.0, 0.0), |p| p.to_f64());
     for k in 0..n {
-        let (a, b) = (poly.get(k)?.to_f64(), poly.get((k + 1) % n)?.to_f64());
+        let a = b;
+        b = poly.get(if k + 1 < n { k + 1 } else { 0 })?.to_f64();
         // Outward normal of a counter-clockwise edge: (dy, −dx).
         let nrm = (b.1 - a.1, a.0 - b.0);
         let num = nrm.0 * (a.0 - origin.0) + nrm.1 * (a.1 - origin.1);
@@ -1164,11 +1171,14 @@ impl Hits {
         branch: &[ObjectId],
     ) -> Option<Hit> {
         self.along_from(scene, eye, eye.to_f64(), dir, branch, true)
+            .0
     }
 
     /// [`Hits::along`] with `e = eye.to_f64()` (converted once per frame by
     /// [`centre_hits`]); `unfolded`: whether to try [`Hits::unfolded`] (not when the
-    /// caller knows that it fails).
+    /// caller knows that it fails). Also whether the remembered levels now hold `branch`
+    /// through mirrors ([`Hits::unfolds`] in a scene known to be the same), found on the
+    /// way.
     fn along_from(
         &mut self,
         scene: &SceneRef<'_>,
@@ -1177,9 +1187,9 @@ impl Hits {
         dir: (f64, f64),
         branch: &[ObjectId],
         unfolded: bool,
-    ) -> Option<Hit> {
+    ) -> (Option<Hit>, bool) {
         if branch.len() > MAX_BRANCH {
-            return hit_along(scene, eye, dir, branch);
+            return (hit_along(scene, eye, dir, branch), false);
         }
         if e != self.eye {
             self.eye = e;
@@ -1187,7 +1197,7 @@ impl Hits {
         }
         if unfolded && branch.len() <= self.len {
             if let Some(hit) = self.unfolded(scene, dir, branch) {
-                return Some(hit);
+                return (Some(hit), true);
             }
         }
         let old = self.len;
@@ -1195,7 +1205,10 @@ impl Hits {
         let hit = self.walk(scene, dir, branch, old, &mut done, &mut same);
         // Deeper remembered levels stay valid only if every level was reused.
         self.len = if hit.is_some() && same { old } else { done };
-        hit
+        match hit {
+            Some((hit, unfolds)) => (Some(hit), unfolds),
+            None => (None, false),
+        }
     }
 
     /// [`Hits::along`] when the remembered levels hold `branch` through mirrors and the
@@ -1209,8 +1222,9 @@ impl Hits {
     }
 
     /// Whether the remembered levels hold `branch` through mirrors: the part of
-    /// [`Hits::unfolded`] that does not depend on the ray, checked once per interval by
-    /// [`centre_hits`] while the levels stay unchanged.
+    /// [`Hits::unfolded`] that does not depend on the ray. After a walk, [`Hits::walk`]
+    /// knows it without the check, and [`centre_hits`] keeps it while the levels stay
+    /// unchanged.
     fn unfolds(&self, scene: &SceneRef<'_>, branch: &[ObjectId]) -> bool {
         let Some(last) = branch.len().checked_sub(1) else {
             return false;
@@ -1306,7 +1320,9 @@ impl Hits {
     }
 
     /// [`Hits::along`]: `done` counts the levels now remembered for this branch, `same`
-    /// whether all of them were reused (levels `0..old` were remembered before).
+    /// whether all of them were reused (levels `0..old` were remembered before); with the
+    /// hit, whether the levels hold the branch through mirrors (every level before the
+    /// last is a mirror, so the last one's `lin` was computed).
     fn walk(
         &mut self,
         scene: &SceneRef<'_>,
@@ -1315,7 +1331,7 @@ impl Hits {
         old: usize,
         done: &mut usize,
         same: &mut bool,
-    ) -> Option<Hit> {
+    ) -> Option<(Hit, bool)> {
         let l = norm(dir.0, dir.1);
         if branch.is_empty() || l <= 0.0 {
             return None;
@@ -1327,6 +1343,7 @@ impl Hits {
         let (mut first, mut length, mut facing) = (0.0, 0.0, 1.0);
         // The product of the reflections so far, while every level is a mirror.
         let mut m = Some([[1.0, 0.0], [0.0, 1.0]]);
+        let mut unfolds = false;
         for (level, &id) in branch.iter().enumerate() {
             let obj = scene.object(id)?;
             let poly = scene.polygon(obj);
@@ -1341,13 +1358,13 @@ impl Hits {
                     *same = false;
                     let (t, k, _, _) = clip_polygon(poly, o, d)?;
                     let entry = Side::of(poly, k)?;
-                    *lv = Level {
-                        id,
-                        material: obj.material,
-                        entry,
-                        lin: m.as_ref().and_then(|m| Unfolded::new(poly, &entry, e, m)),
-                        ..Level::EMPTY
-                    };
+                    // The optics (`inner`, `exit`, `next`, `after`) are recomputed below
+                    // before they are read (`optics` false): only these fields are written.
+                    lv.id = id;
+                    lv.material = obj.material;
+                    lv.entry = entry;
+                    lv.optics = false;
+                    lv.lin = m.as_ref().and_then(|m| Unfolded::new(poly, &entry, e, m));
                     t
                 }
             };
@@ -1361,6 +1378,7 @@ impl Hits {
             facing = libm::fabs(d.0 * nrm.0 + d.1 * nrm.1);
             if level + 1 == branch.len() {
                 *done = level + 1;
+                unfolds = m.is_some() && lv.lin.is_some();
                 break;
             }
             let fresh = !(*same && lv.optics);
@@ -1412,11 +1430,12 @@ impl Hits {
             o = np;
             *done = level + 1;
         }
-        Some(Hit {
+        let hit = Hit {
             first,
             length,
             facing,
-        })
+        };
+        Some((hit, unfolds))
     }
 }
 
@@ -1478,8 +1497,8 @@ pub fn centre_hits<I: Interval>(
             }
         }
         // As before the shortcut: `Hits::unfolded`, then the walk.
-        let hit = hits.along_from(scene, camera.eye, e, dir, branch, unfolded);
-        run = hits.unfolds(scene, branch).then_some((k, None));
+        let (hit, unfolds) = hits.along_from(scene, camera.eye, e, dir, branch, unfolded);
+        run = unfolds.then_some((k, None));
         each(c, k, hit);
     }
 }

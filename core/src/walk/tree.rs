@@ -2212,16 +2212,22 @@ impl<S: Storage> Tree<'_, '_, S> {
             to_f64(pn.0) + t * to_f64(d.0),
             to_f64(pn.1) + t * to_f64(d.1),
         );
-        let big = libm::fmax(libm::fabs(fx), libm::fabs(fy));
+        // The larger magnitude: a comparison, not `libm::fmax` (neither is NaN: `den ≠ 0`).
+        let (ax, ay) = (libm::fabs(fx), libm::fabs(fy));
+        let big = if ax < ay { ay } else { ax };
         if !big.is_finite() || big == 0.0 {
             return Err(WalkError::Corrupt);
         }
-        let (_, exp) = libm::frexp(big);
+        // `libm::frexp`'s exponent and `libm::scalbn`'s scaling, read from and written to
+        // the bits (the same values, without the software routines): `big` is normal, at
+        // least 2⁻¹⁸⁰ (a sum of `f64`s of magnitude at least 2⁻¹²⁸ — ratios and products of
+        // integers below 2¹²⁸ — is zero or at least their smallest ulp) and below 2¹⁹², so
+        // the power of two 2^(52 − exp) is normal and the scaled components stay normal:
+        // the products are exact.
+        let exp = ((big.to_bits() >> 52) & 0x7ff) as i32 - 0x3fe;
+        let scale = f64::from_bits(((0x3ff + 52 - exp) as u64) << 52);
         let lim = crate::geom::point::MAX_ABS_DIRECTION as f64;
-        let (vx, vy) = (
-            round_away(libm::scalbn(fx, 52 - exp)),
-            round_away(libm::scalbn(fy, 52 - exp)),
-        );
+        let (vx, vy) = (round_away(fx * scale), round_away(fy * scale));
         if libm::fabs(vx) > lim || libm::fabs(vy) > lim {
             return Err(WalkError::Corrupt);
         }
