@@ -547,7 +547,21 @@ impl<S: Storage> super::Complex<S> {
         layer: Layer,
         angle: &KeyedAngle,
     ) -> Option<CylinderId> {
-        let c = self.cylinder(from)?;
+        self.across_from_cylinder(scene, from, self.cylinder(from)?, side, layer, angle)
+    }
+
+    /// [`Complex::across_from_keyed`] with the cylinder `from` at hand as `c` (a walk has
+    /// read it already).
+    #[inline(always)]
+    pub(crate) fn across_from_cylinder(
+        &self,
+        scene: &SceneRef<'_>,
+        from: CylinderId,
+        c: &Cylinder,
+        side: Side,
+        layer: Layer,
+        angle: &KeyedAngle,
+    ) -> Option<CylinderId> {
         let (chain, arc) = match side {
             Side::Below => (c.bottom?, 0),
             Side::Above => (c.top?, 1),

@@ -98,7 +98,7 @@ pub use view::{view_capacity, view_into, view_range_into, ViewInterval};
 use crate::geom::sos::{Angle, KeyedAngle};
 use crate::geom::QueryPoint;
 use crate::line_space::{ranked, Bound, Chain};
-use crate::partition::{Complex, CylinderId, Layer, Location, Side, Storage, Wall};
+use crate::partition::{Complex, Cylinder, CylinderId, Layer, Location, Side, Storage, Wall};
 use crate::scene::{ObjectId, SceneRef};
 
 /// Entries of the tangent cache of a ray tree's walkers (two-way set associative, see
@@ -736,7 +736,7 @@ impl<const K: usize> Walker<K> {
         }
         let next = match exit {
             None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
-            Some(e) => self.cross(complex, scene, e, &angle)?,
+            Some(e) => self.cross(complex, scene, c, e, &angle)?,
         };
         self.theta = angle;
         self.last = exit.map(|e| (e.vertex, e.ahead));
@@ -866,7 +866,7 @@ impl<const K: usize> Walker<K> {
         }
         let next = match (exit, &angle) {
             (None, _) => c.left_neighbour.ok_or(WalkError::Corrupt)?,
-            (Some(e), Some(a)) => self.cross(complex, scene, e, a)?,
+            (Some(e), Some(a)) => self.cross(complex, scene, c, e, a)?,
             // A chain crossing always has an angle.
             (Some(_), None) => return Err(WalkError::Corrupt),
         };
@@ -879,13 +879,14 @@ impl<const K: usize> Walker<K> {
         Ok(Some(step_of(at, exit, next)))
     }
 
-    /// The cylinder entered leaving the current one across a chain at `angle` (strictly
+    /// The cylinder entered leaving the current one, `c`, across a chain at `angle` (strictly
     /// inside its θ-range, so the same in both directions).
     #[inline(always)]
     fn cross<S: Storage>(
         &self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        c: &Cylinder,
         exit: ChainExit,
         angle: &KeyedAngle,
     ) -> Result<CylinderId, WalkError> {
@@ -910,7 +911,7 @@ impl<const K: usize> Walker<K> {
         // The entered cylinder overlaps the one left: scan the far side from there
         // (usually a step or two) instead of bisecting the tiling.
         let next = complex
-            .across_from_keyed(scene, self.cur, side, layer, angle)
+            .across_from_cylinder(scene, self.cur, c, side, layer, angle)
             .ok_or(WalkError::Corrupt)?;
         if let Anchor::Floor(m) = self.anchor {
             if complex.cylinder(next).and_then(|n| n.floor) != Some(m) {

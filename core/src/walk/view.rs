@@ -237,6 +237,7 @@ trait Sink {
 
 #[cfg(feature = "alloc")]
 impl Sink for Vec<ViewInterval> {
+    #[inline]
     fn push(&mut self, i: ViewInterval) -> Result<(), WalkError> {
         Vec::push(self, i);
         Ok(())
