@@ -51,8 +51,8 @@
 //! object met are computed once per insertion, grouped by the pair of chains they join (an
 //! event search reads only the group that can fit). The replacement intervals derived from the chain carry the chain
 //! indices they cover, so each chain cylinder is linked to exactly the intervals over it;
-//! where an event leaves their shapes as they were, the open intervals stay as they are
-//! (no sort, no merge with the open set).
+//! an interval whose shape an event leaves as it was (at the same index, when their
+//! number stays) keeps its cylinder, and only the others are sorted and matched by shape.
 //! The order of N and an arc's object along the lines (one offset comparison per vertex
 //! of N) is asked only where the layer depends on it.
 //!
@@ -773,6 +773,9 @@ impl History {
         if a.key != 0 && b.key != 0 && a.key != b.key {
             return a.key.cmp(&b.key);
         }
+        if a.vertex == b.vertex {
+            return Ordering::Equal; // the same wall
+        }
         match (a.vertex == ZERO_WALL, b.vertex == ZERO_WALL) {
             (true, true) => Ordering::Equal,
             (true, false) => Ordering::Less,
@@ -1386,22 +1389,10 @@ impl History {
             .ok_or(lost("chain at 0"))?;
         core::mem::swap(&mut s.chain, &mut s.next);
         derive(&self.cylinders, &s.chain, n, &mut s.rows, &mut s.derived);
-        for k in 0..s.derived.len() {
-            let shape = s.derived[k].0;
-            let id = self.push(Cylinder::new(shape, Wall::Zero))?;
-            match s.open.binary_search_by(|(o, _)| o.cmp(&shape)) {
-                Ok(i) => s.open[i].1 = id,
-                Err(i) => s.open.insert(i, (shape, id)),
-            }
-            s.created.push(id);
-        }
         s.run_id.clear();
         for k in 0..s.derived.len() {
-            let shape = s.derived[k].0;
-            let id = match s.open.binary_search_by_key(&shape, |e| e.0) {
-                Ok(i) => s.open[i].1,
-                Err(_) => return Err(lost("open at 0")),
-            };
+            let id = self.push(Cylinder::new(s.derived[k].0, Wall::Zero))?;
+            s.created.push(id);
             s.run_id.push(id);
         }
         s.chain_dense.clear();
@@ -1720,15 +1711,20 @@ impl History {
                 }
             }
         }
-        let mut crossings = sr.crossings;
+        // The first crossings found again (stale ends), stored once the search is done.
+        let mut found: [Option<(CylinderId, Option<Candidate>)>; 2] = [None; 2];
         for (e, &(id, bound)) in ends.iter().enumerate() {
-            let (Some(id), Some(slot)) = (id, crossings.get_mut(e)) else {
-                continue;
+            let Some(id) = id else { continue };
+            let first = if stale.get(e) == Some(&true) {
+                let first = first_crossing(id, bound);
+                if let Some(x) = found.get_mut(e) {
+                    *x = Some((id, first));
+                }
+                first
+            } else {
+                sr.crossings.get(e).copied().flatten().and_then(|(_, f)| f)
             };
-            if stale.get(e) == Some(&true) {
-                *slot = Some((id, first_crossing(id, bound)));
-            }
-            if let Some((_, Some(first))) = *slot {
+            if let Some(first) = first {
                 if best.as_ref().is_none_or(|(b, _)| less(&first.0, b)) {
                     best = Some(first);
                 }
@@ -1739,35 +1735,56 @@ impl History {
             Some(((_, Src::Pool(i)), _)) => sr.pool.get(i).map(|x| x.1),
             None => None,
         };
-        s.crossings = crossings;
+        for (slot, f) in s.crossings.iter_mut().zip(found) {
+            if f.is_some() {
+                *slot = f;
+            }
+        }
         Some((key?, best?.1))
     }
 
-    /// Closes the replacement intervals of `s.open` that the derived intervals no longer
-    /// have and opens the new ones at `wall`, setting each derived interval's cylinder.
+    /// Closes the replacement intervals of the chain before the event that the derived
+    /// intervals no longer have and opens the new ones at `wall`, setting each derived
+    /// interval's cylinder (`run_id`).
+    ///
+    /// The derived intervals have distinct shapes (the chain crosses each arc once, so no
+    /// two runs share their end arc). When an event keeps their number, an interval with
+    /// the shape it had keeps its cylinder, and only the others are compared by shape (a
+    /// gone shape can only come back at another index). Gone and changed intervals are
+    /// walked in shape order, so cylinders close and open in shape order.
     fn reopen(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
-        // The derived intervals by shape (with their index, so each learns its cylinder).
+        s.gone.clear();
         s.shapes.clear();
-        s.shapes
-            .extend(s.derived.iter().enumerate().map(|(k, d)| (d.0, k as u32)));
-        // By shape only: the order of the indices within a shape does not matter.
+        if s.derived.len() == s.last_derived.len() {
+            for (k, (d, l)) in s.derived.iter().zip(&s.last_derived).enumerate() {
+                if d.0 != l.0 {
+                    let id = s.run_id.get(k).copied().unwrap_or(CylinderId::ZERO);
+                    s.gone.push((l.0, id));
+                    s.shapes.push((d.0, k as u32));
+                }
+            }
+        } else {
+            s.gone.extend(
+                s.last_derived
+                    .iter()
+                    .zip(&s.run_id)
+                    .map(|(l, &id)| (l.0, id)),
+            );
+            s.shapes
+                .extend(s.derived.iter().enumerate().map(|(k, d)| (d.0, k as u32)));
+            s.run_id.clear();
+            s.run_id.resize(s.derived.len(), CylinderId::ZERO);
+        }
+        s.gone.sort_unstable_by_key(|e| e.0);
         s.shapes.sort_unstable_by_key(|e| e.0);
-        s.run_id.clear();
-        s.run_id.resize(s.derived.len(), CylinderId::ZERO);
-        // Replacement intervals that changed: close those gone, open the new ones (both in
-        // shape order).
-        let old = core::mem::take(&mut s.open);
-        let mut open = core::mem::take(&mut s.spare_open);
-        open.clear();
-        let by_shape = core::mem::take(&mut s.shapes);
-        let mut old_rest = old.iter().peekable();
-        let mut shapes = by_shape.iter().peekable();
-        while let Some(&&(sn, _)) = shapes.peek() {
-            // Old intervals before this shape are gone.
-            while let Some(&(_, id)) = old_rest.next_if(|o| o.0 < sn) {
+        let (gone, shapes) = (core::mem::take(&mut s.gone), core::mem::take(&mut s.shapes));
+        let mut gone_rest = gone.iter().peekable();
+        for &(sn, k) in &shapes {
+            // Gone intervals before this shape close.
+            while let Some(&(_, id)) = gone_rest.next_if(|o| o.0 < sn) {
                 self.close(s, id, wall);
             }
-            let id = match old_rest.next_if(|o| o.0 == sn) {
+            let id = match gone_rest.next_if(|o| o.0 == sn) {
                 Some(&(_, id)) => id,
                 None => {
                     let id = self.push(Cylinder::new(sn, wall))?;
@@ -1776,20 +1793,14 @@ impl History {
                     id
                 }
             };
-            open.push((sn, id));
-            // Every derived interval of this shape is this cylinder.
-            while let Some(&(_, k)) = shapes.next_if(|e| e.0 == sn) {
-                if let Some(r) = s.run_id.get_mut(k as usize) {
-                    *r = id;
-                }
+            if let Some(r) = s.run_id.get_mut(k as usize) {
+                *r = id;
             }
         }
-        for &(_, id) in old_rest {
+        for &(_, id) in gone_rest {
             self.close(s, id, wall);
         }
-        s.shapes = by_shape;
-        s.open = open;
-        s.spare_open = old;
+        (s.gone, s.shapes) = (gone, shapes);
         Ok(())
     }
 
@@ -1808,16 +1819,7 @@ impl History {
         derive(&self.cylinders, &s.next, s.n, &mut s.rows, &mut s.derived);
         s.closers.clear();
         s.openers.clear();
-        // The same shapes in the same order as before the event: the same intervals stay
-        // open, each derived interval keeps its cylinder (`run_id`).
-        let same = s.derived.len() == s.last_derived.len()
-            && s.derived
-                .iter()
-                .zip(&s.last_derived)
-                .all(|(a, b)| a.0 == b.0);
-        if !same {
-            self.reopen(s, wall)?;
-        }
+        self.reopen(s, wall)?;
         // Old cylinders entering or leaving the conflict region between their walls keep
         // their geometry outside it, as new cylinders with a new wall.
         // Only the middles of the chains differ (`Splice`): their cylinders are stamped.
@@ -1942,7 +1944,7 @@ impl History {
                 .copied()
                 .filter(|id| self.cylinders[id.index()].left == Wall::Zero),
         );
-        for &(sh, id) in &s.open {
+        for (&(sh, ..), &id) in s.derived.iter().zip(&s.run_id) {
             let first = *s
                 .diff
                 .iter()
@@ -1952,7 +1954,6 @@ impl History {
             self.cylinders[id.index()].right_neighbour = Some(first);
             self.cylinders[first.index()].left_neighbour = Some(id);
         }
-        s.open.clear();
         // The first piece of an old cylinder continues from its old left neighbour (or from
         // that neighbour's last piece); the last piece leads to the old right neighbour.
         s.firsts.sort_unstable();
@@ -2182,10 +2183,12 @@ impl History {
             let e = group[j];
             let before = |x: &Entry| !greater(x, &e);
             let p = match list.get(..end) {
-                Some(l) if l.last().is_some_and(|x| !before(x)) => l.partition_point(before),
+                Some(l) if l.last().is_some_and(|x| !before(x)) => gallop_back(l, before),
                 _ => end,
             };
-            list.copy_within(p..end, p + j + 1);
+            if p < end {
+                list.copy_within(p..end, p + j + 1);
+            }
             list[p + j] = e;
             end = p;
         }
@@ -2227,6 +2230,27 @@ impl History {
             self.entries += 1;
         }
     }
+}
+
+/// [`slice::partition_point`] searched from the end (galloping, then bisection): new
+/// border entries mostly land near the end of their list, and this costs the logarithm
+/// of the distance from it.
+fn gallop_back<T>(list: &[T], pred: impl Fn(&T) -> bool) -> usize {
+    // Invariant: every entry from `hi` on fails `pred`.
+    let mut hi = list.len();
+    let mut step = 1;
+    while hi > 0 {
+        let lo = hi.saturating_sub(step);
+        match list.get(lo) {
+            Some(x) if !pred(x) => hi = lo,
+            _ => {
+                let rest = list.get(lo..hi).unwrap_or(&[]);
+                return lo + rest.partition_point(&pred);
+            }
+        }
+        step = step.saturating_mul(2);
+    }
+    0
 }
 
 /// Whether two cylinders have the same trapezoid and layer (walls, arcs, floor, ceiling).
@@ -2305,17 +2329,17 @@ struct Scratch {
     next: Vec<CylinderId>,
     /// How `next` is spliced from `chain`.
     splice: Splice,
-    /// Replacement intervals open at the current θ, sorted by shape.
-    open: Vec<(Shape, CylinderId)>,
-    spare_open: Vec<(Shape, CylinderId)>,
-    /// The replacement intervals of the chain and the chain indices each covers.
+    /// The replacement intervals of the chain (open at the current θ) and the chain
+    /// indices each covers.
     derived: Vec<(Shape, usize, usize)>,
     /// Those of the chain before the current event.
     last_derived: Vec<(Shape, usize, usize)>,
     /// [`derive`]'s copy of the chain cylinders' fields.
     rows: Vec<Row>,
-    /// `(shape, index in derived)`, sorted.
+    /// [`History::reopen`]'s changed intervals `(shape, index in derived)` and gone ones
+    /// `(shape, cylinder)`.
     shapes: Vec<(Shape, u32)>,
+    gone: Vec<(Shape, CylinderId)>,
     /// The cylinder of each derived interval.
     run_id: Vec<CylinderId>,
     /// `chain_dense` of the chain after the current event.
@@ -2376,7 +2400,6 @@ impl Scratch {
         self.n = n;
         self.chain.clear();
         self.next.clear();
-        self.open.clear();
         self.derived.clear();
         self.created.clear();
         self.links.clear();
