@@ -2183,6 +2183,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         (exacts, out, at): (&[(Wide, Wide)], &mut (Wide, Wide), usize),
         end: &Dir,
         hop: &Hop,
+        mirror: bool,
     ) -> Result<Dir, WalkError> {
         if let Some((v, _)) = end.vertex {
             if v == hop.a || v == hop.b {
@@ -2201,11 +2202,20 @@ impl<S: Storage> Tree<'_, '_, S> {
         if u <= 0.0 || u >= 1.0 {
             return Ok(self.toward(hop.next, if u <= 0.0 { hop.a } else { hop.b }));
         }
+        // Strictly inside the edge (exactly: the quotient of the correctly rounded terms
+        // lies in (0, 1) only if the exact one does). Through an axis-parallel mirror edge
+        // an exact end stays exact (`reflected`): no rounding and no wide directions.
+        let num = cross(diff(a, hop.prev), e);
+        let axis = e.0 == 0 || e.1 == 0;
+        if mirror && axis && end.exact.is_none() {
+            if let Some(dir) = reflected(d, e, num, den) {
+                return Ok(Dir::at(Angle::constant(dir)));
+            }
+        }
         // `P − next = (prev − next) + t·d` with `t = cross(a − prev, e) / den` (see
         // `map_dir`) in `f64`, scaled so that its larger component is about 2⁵²: the
         // direction keeps `f64` precision instead of the query grid's, so that a range far
         // thinner than a grid step at the edge keeps its two ends apart.
-        let num = cross(diff(a, hop.prev), e);
         let t = to_f64(num) / to_f64(den);
         let pn = diff(hop.prev, hop.next);
         let (fx, fy) = (
@@ -2243,7 +2253,6 @@ impl<S: Storage> Tree<'_, '_, S> {
         // without an exact direction (`d` itself is exact) `den` is the one above. Any
         // positive scale is the same direction: an axis-parallel edge (a hall's walls) is
         // taken as its unit vector, which divides `den` and `num` by its length.
-        let axis = e.0 == 0 || e.1 == 0;
         let (e1, num1) = if axis {
             let e1 = (e.0.signum(), e.1.signum());
             (e1, cross(diff(a, hop.prev), e1))
@@ -2253,6 +2262,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // Written to `out` in place (no 272-byte temporaries) and kept on the stack of exact
         // directions until the frame walking it is popped; `false` past `Wide`'s budget.
         let written = match end.exact(exacts) {
+            Some(x) if mirror && axis => reflect_axis(x, e1, num1, out),
             Some(x) => {
                 // `cross(x, e1)`: along an axis one coordinate of `x`, up to sign.
                 let den = match e1 {
@@ -2319,8 +2329,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let at = entry.checked_mul(2).ok_or(WalkError::TreeTooDeep)?;
         let ([x0, x1], below) = exacts.reserve()?;
         let (a, b) = (
-            self.map_end((below, x0, at), lo, hop)?,
-            self.map_end((below, x1, at + 1), hi, hop)?,
+            self.map_end((below, x0, at), lo, hop, flip)?,
+            self.map_end((below, x1, at + 1), hi, hop, flip)?,
         );
         if a.exact.is_none() && b.exact.is_none() {
             exacts.truncate_to(entry);
@@ -2661,6 +2671,52 @@ fn round_away(x: f64) -> f64 {
     }
 }
 
+/// The direction `d` from the previous eye, hitting the line of the mirror edge `e` at
+/// `t = num / den` (`den = cross(d, e)`), seen from the virtual eye, exactly, if `e` is
+/// axis-parallel: there the virtual eye is the exact reflection of the previous one
+/// ([`optics::reflect`] rounds nothing), so the hit `X` seen from it is the hit seen from
+/// the previous eye reflected — `X − next = t·R(d)`, `R` negating the coordinate across the
+/// edge. `None` for another edge, `t = 0` or a direction out of range.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+fn reflected(d: (i128, i128), e: (i128, i128), num: i128, den: i128) -> Option<Direction> {
+    let r = match e {
+        (0, _) => (-d.0, d.1),
+        (_, 0) => (d.0, -d.1),
+        _ => return None,
+    };
+    let r = match num.signum() * den.signum() {
+        1 => r,
+        -1 => (-r.0, -r.1),
+        _ => return None,
+    };
+    Direction::new(i64::try_from(r.0).ok()?, i64::try_from(r.1).ok()?)
+}
+
+/// The exact direction `x` of a range end from the previous eye mapped through an
+/// axis-parallel mirror edge of unit vector `e1` (as [`reflected`] maps an exact angle),
+/// written to `out`: `x` reflected, up to the sign of `t = num / cross(x, e1)` — no
+/// products, and no growth from hop to hop. `false` (and `out` untouched) where `t` is zero.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+fn reflect_axis(x: &(Wide, Wide), e1: (i128, i128), num: i128, out: &mut (Wide, Wide)) -> bool {
+    // `cross(x, e1)`: along an axis one coordinate of `x`, up to sign.
+    let den = match e1 {
+        (0, s) => Sign::of_i128(s).times(x.0.sign()),
+        (s, _) => Sign::of_i128(-s).times(x.1.sign()),
+    };
+    let t = den.times(Sign::of_i128(num));
+    if t == Sign::Zero {
+        return false;
+    }
+    *out = *x;
+    // Negated: the coordinate across the edge, or the other one where `t < 0`.
+    if (e1.0 == 0) == (t == Sign::Positive) {
+        out.0 = out.0.neg();
+    } else {
+        out.1 = out.1.neg();
+    }
+    true
+}
+
 /// The hit point of [`Tree::map_end`] relative to the next eye, exactly, scaled by the
 /// denominator's magnitude: `(prev − next)·den + num·d` (the direction `d` from `prev`, `num`
 /// the numerator of the hit's parameter, `pn = prev − next`), written to `out`; `false` (and
@@ -2823,6 +2879,74 @@ mod tests {
                 (on, r) => panic!("{name}: feature on: {on}, tree {r:?}"),
             }
         }
+    }
+
+    /// Through an axis-parallel mirror edge, the reflected exact direction of a range end
+    /// (`reflected`, `reflect_axis`) is the direction to the hit point from the virtual
+    /// eye, as `map_end`'s general formula `sign(den)·((prev − next)·den + num·d)` has it.
+    #[cfg(feature = "mirrors")]
+    #[test]
+    fn axis_mirror_hop_reflects_the_exact_direction() {
+        use super::{cross, diff, reflect_axis, reflected};
+        use crate::geom::wide::Wide;
+        use crate::geom::Sign;
+        use crate::walk::optics;
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |m: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % (2 * m as u64 + 1)) as i64 - m
+        };
+        let mut compared = 0;
+        for round in 0..2000 {
+            let (x, y, len) = (
+                next(1 << 20) as i32,
+                next(1 << 20) as i32,
+                next(1 << 10) as i32,
+            );
+            let (a, b) = if round % 2 == 0 {
+                (Point::from_raw(x, y), Point::from_raw(x, y + len))
+            } else {
+                (Point::from_raw(x, y), Point::from_raw(x + len, y))
+            };
+            let (Some(a), Some(b)) = (a, b) else { continue };
+            let Some(prev) = QueryPoint::from_raw(next(1 << 40), next(1 << 40)) else {
+                continue;
+            };
+            let Some(eye2) = optics::reflect(prev, a, b) else {
+                continue;
+            };
+            let e = diff(b.to_query(), a.to_query());
+            let e1 = (e.0.signum(), e.1.signum());
+            let d = (i128::from(next(1 << 40)), i128::from(next(1 << 40)));
+            let (den, num) = (cross(d, e1), cross(diff(a.to_query(), prev), e1));
+            if den == 0 || num == 0 {
+                continue;
+            }
+            let pn = diff(prev, eye2);
+            let general = (
+                den.signum() * (den * pn.0 + num * d.0),
+                den.signum() * (den * pn.1 + num * d.1),
+            );
+            // An exact angle, and a wide exact direction.
+            let r = reflected(d, e1, num, den).unwrap();
+            let r = (i128::from(r.x), i128::from(r.y));
+            assert_eq!(cross(r, general), 0, "round {round}");
+            assert!(r.0 * general.0 + r.1 * general.1 > 0, "round {round}");
+            let wide = (Wide::from_i128(d.0), Wide::from_i128(d.1));
+            let mut out = (Wide::default(), Wide::default());
+            assert!(reflect_axis(&wide, e1, num, &mut out), "round {round}");
+            assert_eq!(
+                Wide::cross_sign(&out, general),
+                Some(Sign::Zero),
+                "round {round}"
+            );
+            let dot = Wide::dot(&out, general).map(|w| w.sign());
+            assert_eq!(dot, Some(Sign::Positive), "round {round}");
+            compared += 1;
+        }
+        assert!(compared > 1000, "{compared}");
     }
 
     /// The boundary-direction filter of `resolve`: mapped back through hops modulo P it
