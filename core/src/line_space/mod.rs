@@ -29,6 +29,8 @@ pub use bitangent::{bitangents, is_free, Bitangent};
 pub use cross_section::{cross_section, Interval};
 #[cfg(feature = "alloc")]
 pub use visibility::free_bitangents;
+#[cfg(feature = "alloc")]
+pub(crate) use visibility::{free_bitangents_by_definition, kinetic_sweep, Events};
 
 use crate::geom::sos::{Angle, RankedPoint};
 use crate::geom::Sign;

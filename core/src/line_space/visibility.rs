@@ -25,6 +25,9 @@
 //!   it, close and open cylinders exactly as `build_by_sweep` does; the three cylinders
 //!   opened take the slots of the three closed, and their candidates replace the closed
 //!   ones' in the heap (one sift each instead of a removal and an insertion).
+//! * Each vertex is found with the cylinders it closes and opens, so the sweep reports
+//!   them ([`Events`]) and `build_by_sweep` writes the partition as it goes, without a
+//!   second pass over the vertices.
 //!
 //! Open cylinders are indexed by chain: at any θ a chain has at most two cylinders above
 //! it and two below (one layer on the side where its object is not crossed, the layers
@@ -32,7 +35,10 @@
 //!
 //! Every decision is one of the exact perturbed predicates of the brute force
 //! ([`super::bitangent`]'s tangency test, [`Angle::cmp_angle`]); the heap orders by an
-//! exact integer cross product and defers to `cmp_angle` on ties. No floats anywhere.
+//! integer pseudo-angle that never contradicts θ ([`Key::coarse`]), and on equal values by
+//! the exact integer cross product, then `cmp_angle`. No floats anywhere. A cylinder's
+//! pair of chains often comes back a few vertices later, so the last few pinch
+//! candidates of each bottom chain are remembered ([`MEMO`]).
 //!
 //! Why not a grid of buckets: walking the segment of each candidate bitangent cell by cell
 //! makes the freeness test cheap, but the candidates are still all O(n²) object pairs
@@ -42,8 +48,8 @@
 //! **Safety net.** The argument above relies on the invariants of a valid partition
 //! (at most two open cylinders per chain and side, one cylinder per key, the three wedges
 //! found and distinct, the cross-section at 2π equal to the one at 0). They are checked
-//! as the sweep goes; if one fails, [`free_bitangents`] returns the brute force instead,
-//! so the result is the definition's in every case.
+//! as the sweep goes; if one fails, [`free_bitangents`] returns the brute force instead
+//! (and `build_by_sweep` replays it), so the result is the definition's in every case.
 
 use alloc::vec::Vec;
 use core::cmp::Ordering;
@@ -60,14 +66,64 @@ use crate::scene::{ObjectId, SceneRef};
 /// Cost: O((n + V) log(n + V)) for V free bitangents, times `|P|·|Q|` for the size of the
 /// objects. Equal to [`free_bitangents_brute_force`] sorted by θ.
 pub fn free_bitangents(scene: &SceneRef<'_>) -> Vec<Bitangent> {
-    Kinetic::run(scene).unwrap_or_else(|| {
-        let mut keyed: Vec<(Angle, Bitangent)> = free_bitangents_brute_force(scene)
-            .into_iter()
-            .map(|b| (b.angle(scene), b))
-            .collect();
-        keyed.sort_by(|a, b| a.0.cmp_angle(&b.0));
-        keyed.into_iter().map(|(_, b)| b).collect()
-    })
+    let mut out = Vec::new();
+    match Kinetic::run(scene, &mut out) {
+        Some(()) => out,
+        None => free_bitangents_by_definition(scene),
+    }
+}
+
+/// [`free_bitangents_brute_force`] sorted by θ: the kinetic sweep's fallback.
+pub(crate) fn free_bitangents_by_definition(scene: &SceneRef<'_>) -> Vec<Bitangent> {
+    let mut keyed: Vec<(Angle, Bitangent)> = free_bitangents_brute_force(scene)
+        .into_iter()
+        .map(|b| (b.angle(scene), b))
+        .collect();
+    keyed.sort_by(|a, b| a.0.cmp_angle(&b.0));
+    keyed.into_iter().map(|(_, b)| b).collect()
+}
+
+/// The rotational sweep's events as the kinetic sweep meets them, in θ order, for a caller
+/// that builds the partition on the way ([`kinetic_sweep`]). Cylinders are named by their
+/// slot; a vertex's three opened cylinders take the slots of the three it closes. `None`
+/// from a method stops the sweep.
+pub(crate) trait Events {
+    /// The cylinder at θ = 0 number `i` (in [`cross_section`] order, the `i`-th call) is
+    /// open in `slot`.
+    fn initial(&mut self, slot: u32, c: &Interval) -> Option<()>;
+    /// The next vertex `b` closes the cylinders in slots `closed` (its top, bottom and
+    /// left wedges) and opens the cylinders `opened` with their slots (right of the top
+    /// wedge, right of the bottom wedge, the right wedge).
+    fn vertex(
+        &mut self,
+        b: &Bitangent,
+        closed: [u32; 3],
+        opened: [(u32, Interval); 3],
+    ) -> Option<()>;
+    /// At θ = 2π: the cylinder open in `slot` continues the cylinder at θ = 0 number
+    /// `initial` (called once for each, after the last vertex).
+    fn wrap(&mut self, slot: u32, initial: usize) -> Option<()>;
+}
+
+/// Only the vertices: the free bitangents in θ order.
+impl Events for Vec<Bitangent> {
+    fn initial(&mut self, _: u32, _: &Interval) -> Option<()> {
+        Some(())
+    }
+    fn vertex(&mut self, b: &Bitangent, _: [u32; 3], _: [(u32, Interval); 3]) -> Option<()> {
+        self.push(*b);
+        Some(())
+    }
+    fn wrap(&mut self, _: u32, _: usize) -> Option<()> {
+        Some(())
+    }
+}
+
+/// The kinetic sweep of [`free_bitangents`], reporting its events to `events`; `None` if an
+/// invariant of the partition failed (or `events` stopped it) — the caller then falls back
+/// to [`free_bitangents_by_definition`].
+pub(crate) fn kinetic_sweep<E: Events>(scene: &SceneRef<'_>, events: &mut E) -> Option<()> {
+    Kinetic::run(scene, events)
 }
 
 /// All directed free bitangents of the scene by the definition: every pair of objects
@@ -123,6 +179,23 @@ impl Key {
             Ordering::Equal => None,
         }
     }
+
+    /// θ coarsely, as the heap compares it first: non-decreasing in θ (in the order of
+    /// [`Key::cmp_exact`], then the perturbed one), so that different values order two
+    /// directions as exactly as the cross product and equal ones (rare) go to it. The
+    /// direction turned into the upper half-plane, `(dx, dy)` with `dy ≥ 0`, has the
+    /// "diamond angle" `t = (dy + |dx| − dx) / (dy + |dx|)`, increasing from 0 (θ = 0) to
+    /// 2 (θ = π); the lower half-plane adds 2. The value is `⌊t · 2³⁰⌋`, exact integer
+    /// division: the numerator is below 2³³·2³⁰ (differences below 2³¹), and `⌊·⌋` keeps
+    /// the order. `None` for a zero direction (never for distinct vertices).
+    fn coarse(&self) -> Option<u64> {
+        let (dx, dy) = (i64::from(self.dx), i64::from(self.dy));
+        let (dx, dy) = if self.upper { (dx, dy) } else { (-dx, -dy) };
+        let den = u64::try_from(dy).ok()?.checked_add(dx.unsigned_abs())?;
+        let num = u64::try_from(i64::try_from(den).ok()?.checked_sub(dx)?).ok()?;
+        let t = (num << 30).checked_div(den)?;
+        Some(if self.upper { t } else { t + (2 << 30) })
+    }
 }
 
 /// A pinch candidate: the directed bitangent through `p`, then `q`.
@@ -131,6 +204,8 @@ struct Event {
     p: RankedPoint,
     q: RankedPoint,
     key: Key,
+    /// [`Key::coarse`].
+    coarse: u64,
 }
 
 impl Event {
@@ -151,7 +226,8 @@ impl Event {
             },
         };
         let key = Key { dx, dy, upper };
-        Some(Event { p, q, key })
+        let coarse = key.coarse()?;
+        Some(Event { p, q, key, coarse })
     }
 
     fn angle(&self) -> Angle {
@@ -167,11 +243,11 @@ impl Event {
     }
 }
 
-/// A queued candidate: its direction and its cylinder slot (16 bytes, so that sifting
-/// touches only the heap array).
+/// A queued candidate: its coarse direction ([`Key::coarse`]) and its cylinder slot (16
+/// bytes, so that sifting touches only the heap array).
 #[derive(Clone, Copy, Debug)]
 struct Entry {
-    key: Key,
+    coarse: u64,
     cylinder: u32,
 }
 
@@ -187,28 +263,28 @@ struct Heap {
     entries: Vec<Entry>,
     /// Per cylinder slot: its candidate's index in `entries`, or `EMPTY`.
     position: Vec<u32>,
-    /// Per cylinder slot: its candidate, for exactly parallel keys.
+    /// Per cylinder slot: its candidate, for equal coarse directions.
     events: Vec<Option<Event>>,
 }
 
-/// Queue order: θ, then the slot (a total order; equal θ means the same bitangent).
-/// `events`: the candidates by slot, for exactly parallel keys.
+/// Queue order: θ, then the slot (a total order; equal θ means the same bitangent): the
+/// coarse directions where they differ, else the candidates (`events`, by slot).
 #[inline(always)]
 fn before(events: &[Option<Event>], a: &Entry, b: &Entry) -> bool {
-    match a.key.cmp_exact(&b.key) {
-        Some(o) => o == Ordering::Less,
-        None => before_parallel(events, a, b),
+    if a.coarse != b.coarse {
+        return a.coarse < b.coarse;
     }
+    before_tied(events, a, b)
 }
 
-/// [`before`] for exactly parallel keys (rare; out of line so that the sifting loops keep
+/// [`before`] for equal coarse directions (rare; out of line so that the sifting loops keep
 /// their registers).
 #[cold]
 #[inline(never)]
-fn before_parallel(events: &[Option<Event>], a: &Entry, b: &Entry) -> bool {
+fn before_tied(events: &[Option<Event>], a: &Entry, b: &Entry) -> bool {
     let event = |e: &Entry| events.get(e.cylinder as usize).copied().flatten();
     let theta = match (event(a), event(b)) {
-        (Some(x), Some(y)) => x.angle().cmp_angle(&y.angle()),
+        (Some(x), Some(y)) => x.cmp_direction(&y),
         _ => Ordering::Equal,
     };
     theta.then(a.cylinder.cmp(&b.cylinder)) == Ordering::Less
@@ -302,14 +378,14 @@ impl Heap {
                 let i = self.entries.len();
                 u32::try_from(i).ok().filter(|&i| i != EMPTY)?;
                 self.entries.push(Entry {
-                    key: e.key,
+                    coarse: e.coarse,
                     cylinder: slot,
                 });
                 self.sift_up(i);
             }
             (i, Some(e)) => {
                 let i = i as usize;
-                self.entries.get_mut(i)?.key = e.key;
+                self.entries.get_mut(i)?.coarse = e.coarse;
                 self.sift(i);
             }
             (i, None) => {
@@ -353,6 +429,23 @@ struct Kinetic<'s, 'a> {
     /// Per chain: the open cylinders whose top arc is on it.
     by_top: Vec<[u32; 2]>,
     heap: Heap,
+    /// Per chain (`2·object + bound`): the last [`MEMO`] top chains asked for with it as
+    /// bottom chain, and their [`chain_bitangent`].
+    memo: Vec<[Memo; MEMO]>,
+}
+
+/// Pinch candidates remembered per bottom chain: a cylinder's pair of chains often comes
+/// back a few vertices later (on the grid scene, a quarter of the pairs asked for are
+/// among the last four on the same bottom chain).
+const MEMO: usize = 4;
+
+/// A remembered [`chain_bitangent`]: the top chain's index (`EMPTY`: none) and the tangent
+/// vertices (`EMPTY`: no bitangent).
+#[derive(Clone, Copy)]
+struct Memo {
+    top: u32,
+    p: u32,
+    q: u32,
 }
 
 fn chain_index(c: Chain) -> usize {
@@ -360,8 +453,9 @@ fn chain_index(c: Chain) -> usize {
 }
 
 impl<'s, 'a> Kinetic<'s, 'a> {
-    /// The vertices in θ order, or `None` if an invariant of the partition failed.
-    fn run(scene: &'s SceneRef<'a>) -> Option<Vec<Bitangent>> {
+    /// Sweeps θ from 0 to 2π, reporting to `events`; `None` if an invariant of the
+    /// partition failed.
+    fn run<E: Events>(scene: &'s SceneRef<'a>, events: &mut E) -> Option<()> {
         let n = scene.len();
         let mut k = Kinetic {
             scene,
@@ -370,38 +464,57 @@ impl<'s, 'a> Kinetic<'s, 'a> {
             by_bottom: alloc::vec![[EMPTY; 2]; 2 * n],
             by_top: alloc::vec![[EMPTY; 2]; 2 * n],
             heap: Heap::default(),
+            memo: alloc::vec![
+                [Memo {
+                    top: EMPTY,
+                    p: EMPTY,
+                    q: EMPTY
+                }; MEMO];
+                2 * n
+            ],
         };
-        let mut initial: Vec<Interval> = cross_section(scene, &Angle::ZERO);
-        for &iv in &initial {
-            k.open_cylinder(iv, None)?;
+        let key = |c: &Interval| (c.bottom, c.top, c.floor, c.ceiling);
+        // The cylinders at θ = 0 with their slots, for the check at θ = 2π.
+        let mut initial: Vec<(Interval, u32)> = Vec::new();
+        for (i, iv) in cross_section(scene, &Angle::ZERO).into_iter().enumerate() {
+            let slot = k.open_cylinder(iv, None)?;
+            events.initial(slot, &iv)?;
+            initial.push((iv, u32::try_from(i).ok()?));
         }
         // At most 8 directed bitangents per pair of objects, each found once (θ grows).
         let most = n.saturating_mul(n.saturating_sub(1)).saturating_mul(4);
-        let mut out: Vec<Bitangent> = Vec::new();
+        let mut vertices = 0usize;
         while let Some((cylinder, event)) = k.heap.first() {
-            if out.len() >= most {
+            if vertices >= most {
                 return None;
             }
-            let vertex = k.vertex(cylinder, &event)?;
-            out.push(vertex);
+            k.vertex(cylinder, &event, events)?;
+            vertices += 1;
         }
-        // θ = 2π: the cross-section is the one at θ = 0 again.
-        let key = |c: &Interval| (c.bottom, c.top, c.floor, c.ceiling);
-        let mut last: Vec<Interval> = k
+        // θ = 2π: the cross-section is the one at θ = 0 again; with one cylinder per key,
+        // sorting both pairs each open cylinder with the one at θ = 0 it continues.
+        let mut last: Vec<(Interval, u32)> = k
             .cylinders
             .iter()
-            .filter(|c| c.open)
-            .map(|c| c.interval)
-            .collect();
-        last.sort_unstable_by_key(key);
-        initial.sort_unstable_by_key(key);
-        (last == initial).then_some(out)
+            .enumerate()
+            .filter(|(_, c)| c.open)
+            .map(|(slot, c)| Some((c.interval, u32::try_from(slot).ok()?)))
+            .collect::<Option<_>>()?;
+        last.sort_unstable_by_key(|c| key(&c.0));
+        initial.sort_unstable_by_key(|c| key(&c.0));
+        if last.len() != initial.len() || last.iter().zip(&initial).any(|(a, b)| a.0 != b.0) {
+            return None;
+        }
+        for ((_, slot), (_, i)) in last.iter().zip(&initial) {
+            events.wrap(*slot, *i as usize)?;
+        }
+        Some(())
     }
 
     /// Opens a cylinder and queues its pinch candidate if that comes after `after` (the
     /// vertex at its left wall; `None`: θ = 0), in place of the candidate of the cylinder
-    /// closed in its slot.
-    fn open_cylinder(&mut self, c: Interval, after: Option<&Event>) -> Option<()> {
+    /// closed in its slot. Returns its slot.
+    fn open_cylinder(&mut self, c: Interval, after: Option<&Event>) -> Option<u32> {
         let id = match self.free.last() {
             Some(&id) => id,
             None => u32::try_from(self.cylinders.len())
@@ -432,7 +545,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         }
         let mut candidate = None;
         if let (Some(bottom), Some(top)) = (c.bottom, c.top) {
-            if let Some((p, q)) = chain_bitangent(self.scene, bottom, top) {
+            if let Some((p, q)) = self.chain_bitangent(bottom, top)? {
                 let e = Event::new(self.scene, p, q)?;
                 let later = match after {
                     Some(v) => e.cmp_direction(v) == Ordering::Greater,
@@ -441,7 +554,28 @@ impl<'s, 'a> Kinetic<'s, 'a> {
                 candidate = later.then_some(e);
             }
         }
-        self.heap.set(id, candidate)
+        self.heap.set(id, candidate)?;
+        Some(id)
+    }
+
+    /// [`chain_bitangent`], remembered ([`MEMO`]); `None` for a chain out of range.
+    fn chain_bitangent(&mut self, bottom: Chain, top: Chain) -> Option<Option<(usize, usize)>> {
+        let memo = self.memo.get_mut(chain_index(bottom))?;
+        let t = u32::try_from(chain_index(top)).ok()?;
+        if let Some(m) = memo.iter().find(|m| m.top == t) {
+            return Some((m.p != EMPTY).then_some((m.p as usize, m.q as usize)));
+        }
+        let b = chain_bitangent(self.scene, bottom, top);
+        let index = |v: usize| u32::try_from(v).ok().filter(|&v| v != EMPTY);
+        let [p, q] = match b {
+            Some((p, q)) => [index(p)?, index(q)?],
+            None => [EMPTY; 2],
+        };
+        memo.copy_within(..MEMO - 1, 1);
+        if let Some(first) = memo.first_mut() {
+            *first = Memo { top: t, p, q };
+        }
+        Some(b)
     }
 
     /// Closes a cylinder. Its candidate stays queued until the cylinder opened in its slot
@@ -487,8 +621,8 @@ impl<'s, 'a> Kinetic<'s, 'a> {
 
     /// Processes the vertex of a pinch candidate as `build_by_sweep` does: closes its top,
     /// bottom and left wedges (the last is the candidate's cylinder) and opens the three
-    /// cylinders right of it.
-    fn vertex(&mut self, cylinder: u32, event: &Event) -> Option<Bitangent> {
+    /// cylinders right of it; reports it to `events`.
+    fn vertex<E: Events>(&mut self, cylinder: u32, event: &Event, events: &mut E) -> Option<()> {
         let left_id = cylinder as usize;
         let left = self.cylinders.get(left_id).filter(|c| c.open)?.interval;
         let (cp, cq) = (left.bottom?, left.top?);
@@ -516,30 +650,37 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         // The right wedge's face, from the floors and ceilings just closed.
         let closed = [ct, cd, cl].map(|c| (c.floor, c.ceiling));
         let (floor, ceiling) = right.face(&b, closed)?;
-        self.open_cylinder(
+        let opened = [
             Interval {
                 bottom: Some(cp),
                 ..ct
             },
-            Some(event),
-        )?;
-        self.open_cylinder(
             Interval {
                 top: Some(cq),
                 ..cd
             },
-            Some(event),
-        )?;
-        self.open_cylinder(
             Interval {
                 floor,
                 ceiling,
                 bottom: Some(cq),
                 top: Some(cp),
             },
-            Some(event),
-        )?;
-        Some(b)
+        ];
+        let mut slots = [0; 3];
+        for (slot, c) in slots.iter_mut().zip(opened) {
+            *slot = self.open_cylinder(c, Some(event))?;
+        }
+        // Slot ids are below `EMPTY` (`open_cylinder`), so they fit `u32`.
+        let closed = [t, d, l].map(|s| s as u32);
+        events.vertex(
+            &b,
+            closed,
+            [
+                (slots[0], opened[0]),
+                (slots[1], opened[1]),
+                (slots[2], opened[2]),
+            ],
+        )
     }
 }
 
@@ -606,9 +747,49 @@ mod tests {
             for seed in 0..8 {
                 let s = coarse_grid(c, seed);
                 let s = s.as_ref();
-                let fast = Kinetic::run(&s).expect("invariants hold");
+                let mut fast = Vec::new();
+                Kinetic::run(&s, &mut fast).expect("invariants hold");
                 let slow = sorted(&s, free_bitangents_brute_force(&s));
                 assert_eq!(fast, slow, "{c}x{c} seed {seed}");
+            }
+        }
+    }
+
+    /// [`Key::coarse`] never contradicts the exact order of [`Key::cmp_exact`], from small
+    /// directions to the extremes of the bit budget (differences up to 2³¹ − 1), with both
+    /// perturbed half-planes for horizontal directions.
+    #[test]
+    fn coarse_directions_keep_the_exact_order() {
+        let m = (1i32 << 30) - 1;
+        let sizes = [0, 1, 2, 3, 7, 1 << 20, m, 2 * m + 1];
+        let mut keys = Vec::new();
+        for &x in &sizes {
+            for &y in &sizes {
+                for (dx, dy) in [(x, y), (-x, y), (x, -y), (-x, -y)] {
+                    let uppers: &[bool] = match dy.cmp(&0) {
+                        Ordering::Greater => &[true],
+                        Ordering::Less => &[false],
+                        Ordering::Equal => &[true, false],
+                    };
+                    for &upper in uppers {
+                        if (dx, dy) != (0, 0) {
+                            keys.push(Key { dx, dy, upper });
+                        }
+                    }
+                }
+            }
+        }
+        for a in &keys {
+            for b in &keys {
+                let (ca, cb) = (a.coarse().unwrap(), b.coarse().unwrap());
+                if let Some(o) = a.cmp_exact(b) {
+                    if o == Ordering::Less {
+                        assert!(ca <= cb, "{a:?} {b:?}");
+                    }
+                } else if a.dx.signum() == b.dx.signum() && a.dy.signum() == b.dy.signum() {
+                    // The same direction: the same value.
+                    assert_eq!(ca, cb, "{a:?} {b:?}");
+                }
             }
         }
     }
@@ -618,7 +799,8 @@ mod tests {
         for (cols, rows, size, gap) in [(1, 1, 2, 1), (2, 1, 2, 1), (3, 3, 2, 1), (4, 2, 3, 1)] {
             let s = boxes(cols, rows, size, gap);
             let s = s.as_ref();
-            let fast = Kinetic::run(&s).expect("invariants hold");
+            let mut fast = Vec::new();
+            Kinetic::run(&s, &mut fast).expect("invariants hold");
             let slow = sorted(&s, free_bitangents_brute_force(&s));
             assert_eq!(fast, slow, "{cols}x{rows}");
         }

@@ -199,10 +199,9 @@ pub(super) fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
 }
 
 /// The tiling slots a cylinder appears in: below its top arc, above its bottom arc.
-fn arcs(c: &Cylinder) -> impl Iterator<Item = usize> + '_ {
+fn arcs(c: &Cylinder) -> [Option<usize>; 2] {
     [(c.top, Side::Below), (c.bottom, Side::Above)]
-        .into_iter()
-        .filter_map(move |(chain, side)| chain.map(|ch| slot(ch, side, Layer::of(c, ch))))
+        .map(|(chain, side)| chain.map(|ch| slot(ch, side, Layer::of(c, ch))))
 }
 
 /// Builds the derived state in growable storage (construction and `alloc` loading).
@@ -302,18 +301,23 @@ impl<'a> BordersRef<'a> {
         for (c, kept) in cylinders.iter().zip(start.iter_mut()) {
             // A cylinder at θ = 0 goes in both slots of the index (the second one's
             // contents are replaced by the tree maxima).
-            let zero = (c.left == Wall::Zero).then_some([zero_slot, zero_slot + 1]);
-            let slots = arcs(c)
-                .filter(|&s| s < tilings)
-                .chain(zero.into_iter().flatten());
-            let kept = kept.as_flattened_mut();
-            kept.fill(u32::MAX);
-            for (s, k) in slots.zip(kept.iter_mut()) {
+            let zero = c.left == Wall::Zero;
+            let [top, bottom] = arcs(c).map(|s| s.filter(|&s| s < tilings));
+            let slots = [
+                top,
+                bottom,
+                zero.then_some(zero_slot),
+                zero.then_some(zero_slot + 1),
+            ];
+            // At most four slots, into the four entries (unused ones `u32::MAX`).
+            let mut entries = [u32::MAX; 4];
+            for (s, k) in slots.into_iter().flatten().zip(entries.iter_mut()) {
                 if let Some(n) = offsets.get_mut(s + 1) {
                     *n += 1;
                 }
                 *k = s as u32;
             }
+            kept.as_flattened_mut().copy_from_slice(&entries);
         }
         let mut sum = 0u32;
         for o in offsets.iter_mut() {

@@ -3,9 +3,11 @@
 //!
 //! Given the cylinders at θ = 0 and the vertices sorted by θ, every vertex closes the three
 //! open cylinders of its corner faces and opens three (the table in [`super`]): which ones
-//! follows from the vertex's chains and objects alone, with no predicate. So the
-//! rotational sweep ([`super::build_by_sweep`]) and the reader of a version-3 file (which
-//! stores only the vertices and the cylinders at θ = 0, `docs/format.md`) share this loop.
+//! follows from the vertex's chains and objects alone, with no predicate. So the reader
+//! of a version-3 file (which stores only the vertices and the cylinders at θ = 0,
+//! `docs/format.md`) and the rotational sweep ([`super::build_by_sweep`]) when its kinetic
+//! sweep falls back to the brute-force vertices share this loop (otherwise the kinetic
+//! sweep finds each vertex's cylinders itself and builds the same partition).
 //! It allocates nothing: the open cylinders are kept in a caller's slice of
 //! [`open_slots`] entries, one per chain (at a fixed θ at most two open cylinders share a
 //! chain on one side: the layers before and after its object).
