@@ -118,13 +118,16 @@ impl Input {
         self.stored.as_ref()?.history.as_ref()
     }
 
-    /// The complex of `scene` (the loaded scene or a `SubScene` of it): the stored one when
-    /// it is the whole scene, else built by the rotational sweep.
+    /// The complex of `scene` (the loaded scene or a `SubScene` of it) for many walks: the
+    /// stored one when it is the whole scene, else built by the rotational sweep, with its
+    /// arc-vertex index ([`Complex::with_arc_vertices`]: it pays for itself after some
+    /// thousands of views, so one-shot commands go without it).
     pub fn complex_for(&self, scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
-        match self.stored_for(scene) {
-            Some(c) => Ok(c.clone()),
-            None => build_by_sweep(scene),
-        }
+        let complex = match self.stored_for(scene) {
+            Some(c) => c.clone(),
+            None => build_by_sweep(scene)?,
+        };
+        Ok(complex.with_arc_vertices(scene))
     }
 
     /// As [`Input::complex_for`], as a [`Built`] for the commands of `vcx build`'s

@@ -88,6 +88,62 @@ pub fn tangent_vertex(
     best
 }
 
+/// The vertex through which every line of `chain` with a direction strictly between the
+/// two ends passes, if it is one vertex: the arc of a cylinder with walls at those
+/// directions is then one sinusoid, and a trace crosses it only where the line through
+/// the eye and that vertex has a direction inside. The range runs counter-clockwise from
+/// `from` to `to` (`to_full_turn`: to θ = 2π, `to` being θ = 0), less than a turn; each end
+/// comes with the chain's tangent vertex there if the caller knows it (a wall's bitangent
+/// touches the chain).
+///
+/// A chain's tangent vertex advances round the polygon as θ grows, once round per turn,
+/// changing only at the object's own edge directions — never exactly at a wall or its
+/// reverse (the direction of two vertices of different objects, or a constant, which the
+/// perturbation tells apart from an edge's). Each vertex holds it over less than half a
+/// turn (its exterior angle), so the others together over more: over at most half a turn
+/// the same vertex at both ends means the same vertex throughout, and a longer range is
+/// checked at `from` + π as well. Cost: a [`tangent_vertex`] at most, and two or four offset
+/// comparisons (the object is convex: a vertex whose neighbours' lines lie on the object's
+/// side of its own is the tangent vertex).
+#[cfg(feature = "alloc")]
+pub(crate) fn arc_vertex(
+    scene: &SceneRef<'_>,
+    chain: Chain,
+    (from, at_from): (&Angle, Option<usize>),
+    (to, at_to): (&Angle, Option<usize>),
+    to_full_turn: bool,
+) -> Option<usize> {
+    use core::cmp::Ordering;
+    // The vertex at one end, and whether it is known to be the one at `from`.
+    let (v, known_at_from) = match (at_from, at_to) {
+        (Some(v), _) => (v, true),
+        (None, Some(w)) => (w, false),
+        (None, None) => (tangent_vertex(scene, chain.object, from, chain.bound), true),
+    };
+    let obj = scene.object(chain.object)?;
+    let (first, n) = (obj.first_vertex(), obj.len());
+    let i = v.checked_sub(first).filter(|&i| i < n)?;
+    let prev = first + if i == 0 { n - 1 } else { i - 1 };
+    let next = first + if i + 1 == n { 0 } else { i + 1 };
+    // As `tangent_vertex` keeps the lowest (`Lower`) or highest line.
+    let inside = match chain.bound {
+        Bound::Lower => Sign::Positive,
+        Bound::Upper => Sign::Negative,
+    };
+    let tangent_at = |angle: &Angle| {
+        [prev, next]
+            .iter()
+            .all(|&k| angle.offset_cmp(ranked(scene, v), ranked(scene, k)) == inside)
+    };
+    let same_at_to = at_to.map_or_else(|| tangent_at(to), |w| w == v);
+    // More than half a turn: `from` in the upper half-plane and `to` past `from` + π.
+    let half = from.reversed();
+    let longer = from.cmp_angle(&Angle::ZERO.reversed()) == Ordering::Less
+        && (to_full_turn || to.cmp_angle(&half) == Ordering::Greater);
+    let same = same_at_to && (known_at_from || tangent_at(from));
+    (same && (!longer || tangent_at(&half))).then_some(v)
+}
+
 /// Whether the object is ahead of the query point `q` along the line of direction θ
 /// through it. `None` if the line does not cross the object (perturbed).
 pub fn object_ahead_of_query(

@@ -67,7 +67,15 @@ pub struct BordersRef<'a> {
     /// cylinder containing this cylinder's left wall. A walk leaving the cylinder across
     /// the arc scans forward from there.
     start: &'a [[[u32; 2]; 2]],
+    /// For every cylinder, the vertex of its bottom (`[0]`) and top (`[1]`) arc where that
+    /// arc is one vertex's sinusoid ([`crate::line_space::arc_vertex`]; global index,
+    /// [`NO_ARC_VERTEX`] otherwise): a walk takes its candidate exit there without the
+    /// tangents from the eye. Empty: not kept (walks use the tangents for every arc).
+    arcs: &'a [[u32; 2]],
 }
+
+/// An arc without a single vertex in [`BordersRef`]'s arc vertices (or unbounded).
+pub(crate) const NO_ARC_VERTEX: u32 = u32::MAX;
 
 /// Derived lookup state of a complex in growable storage (feature `alloc`).
 #[cfg(feature = "alloc")]
@@ -77,17 +85,20 @@ pub struct Borders {
     ids: Vec<CylinderId>,
     offsets: Vec<u32>,
     start: Vec<[[u32; 2]; 2]>,
+    arcs: Vec<[u32; 2]>,
 }
 
 #[cfg(feature = "alloc")]
 impl Borders {
     /// The borrowed view.
+    #[inline]
     pub fn borrowed(&self) -> BordersRef<'_> {
         BordersRef {
             angles: &self.angles,
             ids: &self.ids,
             offsets: &self.offsets,
             start: &self.start,
+            arcs: &self.arcs,
         }
     }
 }
@@ -213,6 +224,7 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
         ids: alloc::vec![CylinderId::ZERO; sizes.ids],
         offsets: alloc::vec![0; sizes.offsets],
         start: alloc::vec![[[0; 2]; 2]; sizes.start],
+        arcs: Vec::new(),
     };
     let buffers = BorderBuffers {
         angles: &mut b.angles,
@@ -227,6 +239,74 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
         .unwrap_or(0);
     b.ids.truncate(used);
     b
+}
+
+#[cfg(feature = "alloc")]
+impl Borders {
+    /// Keeps the arc vertices of `complex` (this state's complex): see
+    /// [`Complex::with_arc_vertices`].
+    pub(crate) fn keep_arc_vertices(&mut self, scene: &SceneRef<'_>, complex: &Complex) {
+        self.arcs = arc_vertices(scene, complex, &self.angles);
+    }
+}
+
+/// The arc vertices of every cylinder (see [`BordersRef`]), from the walls' angles
+/// (`angles`, or computed where empty). Vertices whose bitangent touches the arc's chain
+/// give its tangent vertex at that wall directly.
+#[cfg(feature = "alloc")]
+fn arc_vertices(scene: &SceneRef<'_>, complex: &Complex, angles: &[Angle]) -> Vec<[u32; 2]> {
+    let wall = |w: Wall| match w {
+        Wall::Zero => Some((Angle::ZERO, None)),
+        Wall::Vertex(v) => {
+            let b = complex.vertices.get(v.index())?.bitangent;
+            let angle = angles
+                .get(v.index())
+                .copied()
+                .unwrap_or_else(|| b.angle(scene));
+            Some((angle, Some(b)))
+        }
+    };
+    let on = |b: Option<crate::line_space::Bitangent>, chain: Chain| {
+        let b = b?;
+        if (b.first_object, b.first_bound) == (chain.object, chain.bound) {
+            Some(b.first)
+        } else if (b.second_object, b.second_bound) == (chain.object, chain.bound) {
+            Some(b.second)
+        } else {
+            None
+        }
+    };
+    complex
+        .cylinders
+        .iter()
+        .map(|c| {
+            let ends = (wall(c.left), wall(c.right));
+            let mut out = [NO_ARC_VERTEX; 2];
+            let (Some((l, lb)), Some((r, rb))) = ends else {
+                return out;
+            };
+            // A cylinder round the whole circle has no single vertex on any arc.
+            if c.left == Wall::Zero && c.right == Wall::Zero {
+                return out;
+            }
+            for (slot, chain) in out.iter_mut().zip([c.bottom, c.top]) {
+                let Some(chain) = chain.filter(|ch| scene.object(ch.object).is_some()) else {
+                    continue;
+                };
+                let v = crate::line_space::arc_vertex(
+                    scene,
+                    chain,
+                    (&l, on(lb, chain)),
+                    (&r, on(rb, chain)),
+                    c.right == Wall::Zero,
+                );
+                if let Some(v) = v.and_then(|v| u32::try_from(v).ok()) {
+                    *slot = v;
+                }
+            }
+            out
+        })
+        .collect()
 }
 
 impl<'a> BordersRef<'a> {
@@ -414,7 +494,30 @@ impl<'a> BordersRef<'a> {
             ids,
             offsets,
             start,
+            arcs: &[],
         })
+    }
+
+    /// The same state without the arc vertices (walks then take every candidate exit from
+    /// the tangents), to check that both walk alike.
+    #[cfg(all(test, feature = "alloc"))]
+    pub(crate) fn without_arcs(self) -> BordersRef<'a> {
+        BordersRef { arcs: &[], ..self }
+    }
+
+    /// Whether the arc vertices are kept.
+    #[cfg(all(test, feature = "alloc"))]
+    pub(crate) fn has_arcs(&self) -> bool {
+        !self.arcs.is_empty()
+    }
+
+    /// The vertices of the bottom and top arcs of cylinder `c` (see the type), if kept.
+    #[inline(always)]
+    pub(crate) fn arcs(&self, c: CylinderId) -> [u32; 2] {
+        self.arcs
+            .get(c.index())
+            .copied()
+            .unwrap_or([NO_ARC_VERTEX; 2])
     }
 
     /// The angle of vertex `v`, if stored.
@@ -435,6 +538,7 @@ impl<'a> BordersRef<'a> {
             + core::mem::size_of_val(self.ids)
             + core::mem::size_of_val(self.offsets)
             + core::mem::size_of_val(self.start)
+            + core::mem::size_of_val(self.arcs)
     }
 }
 
@@ -709,6 +813,16 @@ impl<'a, 's> ZeroIndex<'a, 's> {
             .map_or((i64::MIN, i64::MAX), |c| zero_span(&self.scene, c))
     }
 
+    /// The top of [`ZeroIndex::span`] alone (a stab reads the subtrees' maxima's tops).
+    #[inline]
+    fn top(&self, id: CylinderId) -> i64 {
+        self.cylinders
+            .get(id.index())
+            .and_then(|c| c.top)
+            .and_then(|t| zero_height(&self.scene, t))
+            .unwrap_or(i64::MAX)
+    }
+
     /// Sorts `sorted` by bottom height and fills `maxima`, bottom-up.
     fn build(
         scene: &SceneRef<'_>,
@@ -779,7 +893,7 @@ impl<'a, 's> ZeroIndex<'a, 's> {
         while let Some((i, level)) = stack.pop() {
             if self
                 .subtree_argmax(i, level)
-                .is_none_or(|m| self.span(m).1 < y)
+                .is_none_or(|m| self.top(m) < y)
             {
                 continue;
             }

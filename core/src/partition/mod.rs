@@ -45,6 +45,7 @@ mod validate;
 pub(crate) use borders::zero_height;
 #[cfg(feature = "alloc")]
 pub use borders::Borders;
+pub(crate) use borders::NO_ARC_VERTEX;
 pub use borders::{BorderBuffers, BorderSizes, BordersRef, BufferTooSmall, Layer, Side};
 pub(crate) use locate::point_in_object;
 pub use locate::{point_in_scene, Location};
@@ -150,6 +151,7 @@ impl Storage for Owned {
     type Vertices = alloc::vec::Vec<Vertex>;
     type Cylinders = alloc::vec::Vec<Cylinder>;
     type Borders = Borders;
+    #[inline]
     fn borders(b: &Borders) -> BordersRef<'_> {
         b.borrowed()
     }
@@ -212,6 +214,20 @@ impl Complex {
         };
         complex.borders = borders::build(scene, &complex);
         complex
+    }
+
+    /// The same complex with its walk index of arc vertices: for every cylinder, the
+    /// vertex of its bottom and top arc where that arc is one vertex's sinusoid over the
+    /// cylinder's θ-range (8 bytes per cylinder). Walks (views, ray trees) then take the
+    /// candidate exit across such an arc without the tangents from the eye: the same
+    /// results, about 15 % fewer instructions per view of the n = 1024 grid. Neither
+    /// construction nor decoding computes it (it costs about half a decode, ~565
+    /// instructions per cylinder); slice complexes (devices) walk without it.
+    pub fn with_arc_vertices(mut self, scene: &crate::scene::SceneRef<'_>) -> Complex {
+        let mut borders = core::mem::take(&mut self.borders);
+        borders.keep_arc_vertices(scene, &self);
+        self.borders = borders;
+        self
     }
 }
 

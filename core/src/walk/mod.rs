@@ -98,7 +98,9 @@ pub use view::{view_capacity, view_into, view_range_into, ViewInterval};
 use crate::geom::sos::{Angle, KeyedAngle};
 use crate::geom::QueryPoint;
 use crate::line_space::{ranked, Bound, Chain};
-use crate::partition::{Complex, Cylinder, CylinderId, Layer, Location, Side, Storage, Wall};
+use crate::partition::{
+    Complex, Cylinder, CylinderId, Layer, Location, Side, Storage, Wall, NO_ARC_VERTEX,
+};
 use crate::scene::{ObjectId, SceneRef};
 
 /// Entries of the tangent cache of a ray tree's walkers (two-way set associative, see
@@ -110,7 +112,10 @@ const TANGENT_CACHE: usize = 8;
 /// Entries of the tangent cache of a view's walk ([`Complex::walk_from`]), one walker on
 /// the stack: a grid view from n = 1024 meets about 40 objects' chains, revisited all
 /// around the circle (32 entries miss a third more often: +3.3 % instructions per view
-/// for 512 B less stack; 128 cost more to clear than they save).
+/// for 512 B less stack; 128 cost more to clear than they save). Measured without the arc
+/// vertices (`BordersRef`), as a complex over caller-provided slices walks; with them the
+/// cache serves only the arcs that are not one vertex's (on the n = 1024 grid two misses
+/// per view instead of 52).
 const VIEW_TANGENT_CACHE: usize = 64;
 
 /// How a walk follows a trace across primary walls.
@@ -532,6 +537,11 @@ impl CachedTangents {
 /// θ = 0 after one full turn. With `end: None` a walk stops at the permanent wall in
 /// either direction (θ = 2π ccw, θ = 0 cw) without crossing it.
 ///
+/// A chain's candidate exit is the crossing at its tangent vertex from `q`; where the
+/// cylinder's arc on that chain is one vertex's sinusoid (the arc vertices derived on
+/// load, [`crate::partition::BordersRef`]) it is that vertex, without the tangents (see
+/// [`Walker::candidate`]).
+///
 /// `K` is the number of entries of the tangent cache (even): two-way set associative,
 /// the set chosen by a multiplicative hash of the object id (neighbouring objects, which a
 /// walk meets together, land in different sets); a miss moves the set's first entry to its
@@ -703,6 +713,31 @@ impl<const K: usize> Walker<K> {
         }
     }
 
+    /// The tangent vertex of the one crossing of `chain` with the vertex `ahead` of the eye
+    /// or behind it that can be an exit of the cylinder (see [`exits_through`]); `arc` is
+    /// the cylinder's arc vertex on that chain ([`NO_ARC_VERTEX`]: none).
+    ///
+    /// Where the arc is one vertex's sinusoid that vertex is the candidate, without the
+    /// tangents from the eye: if the line through the eye and it has a direction inside
+    /// the cylinder's θ-range, it is the chain's tangent line there (the chain's line in
+    /// that direction passes through the vertex), so the vertex is the tangent; and a
+    /// tangent line of the chain with a direction inside passes through the arc's vertex,
+    /// so no other tangent vertex can give a crossing inside. Outside the range the
+    /// candidate is compared away either way.
+    #[inline(always)]
+    fn candidate(
+        &mut self,
+        scene: &SceneRef<'_>,
+        chain: Chain,
+        arc: u32,
+        ahead: bool,
+    ) -> Option<usize> {
+        if arc != NO_ARC_VERTEX {
+            return Some(arc as usize);
+        }
+        self.tangent_on(scene, chain.object, tangent_bound(chain, ahead))
+    }
+
     /// One counter-clockwise step: the first exit after θ.
     #[inline(always)]
     fn next_ccw<S: Storage>(
@@ -721,8 +756,9 @@ impl<const K: usize> Walker<K> {
             w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
         };
         // Unrolled by hand: the loop over the two chains cost a view 2 % more.
-        self.chain_exit_ccw(scene, c.bottom, Side::Below, &mut best);
-        self.chain_exit_ccw(scene, c.top, Side::Above, &mut best);
+        let [bottom, top] = complex.borders_ref().arcs(self.cur);
+        self.chain_exit_ccw(scene, (c.bottom, bottom), Side::Below, &mut best);
+        self.chain_exit_ccw(scene, (c.top, top), Side::Above, &mut best);
         let Some((l, angle, exit)) = best else {
             return match self.end {
                 None => Ok(None), // θ reached 2π
@@ -745,13 +781,14 @@ impl<const K: usize> Walker<K> {
         Ok(Some(step_of(angle.angle, exit, next)))
     }
 
-    /// The crossing of `chain` (the cylinder's chain on `side`) after θ that takes a
-    /// counter-clockwise walk out of the cylinder, into `best` if it comes first.
+    /// The crossing of `chain` (the cylinder's chain on `side`, with its arc vertex
+    /// `arc`) after θ that takes a counter-clockwise walk out of the cylinder, into `best`
+    /// if it comes first.
     #[inline(always)]
     fn chain_exit_ccw(
         &mut self,
         scene: &SceneRef<'_>,
-        chain: Option<Chain>,
+        (chain, arc): (Option<Chain>, u32),
         side: Side,
         best: &mut Option<(u8, KeyedAngle, Option<ChainExit>)>,
     ) {
@@ -766,7 +803,7 @@ impl<const K: usize> Walker<K> {
         // `exits_through`. The line q → h lies on the chain of h's tangent, its reverse on
         // the other: the candidate is the tangent on this chain (ahead) or the other one.
         let ahead = exits_through(side, true);
-        let Some(h) = self.tangent_on(scene, chain.object, tangent_bound(chain, ahead)) else {
+        let Some(h) = self.candidate(scene, chain, arc, ahead) else {
             return;
         };
         if self.last == Some((h, ahead)) {
@@ -801,7 +838,7 @@ impl<const K: usize> Walker<K> {
     fn chain_exit_cw(
         &mut self,
         scene: &SceneRef<'_>,
-        chain: Option<Chain>,
+        (chain, arc): (Option<Chain>, u32),
         side: Side,
         best: &mut Option<(u8, Option<KeyedAngle>, Option<ChainExit>)>,
     ) {
@@ -812,7 +849,7 @@ impl<const K: usize> Walker<K> {
         }
         let lap = self.lap;
         let bound = tangent_bound(chain, exits_through(side, false));
-        let Some(h) = self.tangent_on(scene, chain.object, bound) else {
+        let Some(h) = self.candidate(scene, chain, arc, bound == chain.bound) else {
             return;
         };
         let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
@@ -851,8 +888,9 @@ impl<const K: usize> Walker<K> {
                 .map(|a| (lap, Some(a.keyed()), None)),
         };
         // Unrolled by hand, as counter-clockwise.
-        self.chain_exit_cw(scene, c.bottom, Side::Below, &mut best);
-        self.chain_exit_cw(scene, c.top, Side::Above, &mut best);
+        let [bottom, top] = complex.borders_ref().arcs(self.cur);
+        self.chain_exit_cw(scene, (c.bottom, bottom), Side::Below, &mut best);
+        self.chain_exit_cw(scene, (c.top, top), Side::Above, &mut best);
         let Some((l, angle, exit)) = best else {
             return match self.end {
                 None => Ok(None), // θ reached 0
@@ -1256,6 +1294,111 @@ mod tests {
             }
         }
         (walked, exact, anchored)
+    }
+
+    /// A cylinder's arc vertex (`Complex::with_arc_vertices`) gives the same walks as the
+    /// tangents from the eye: every step of full counter-clockwise and clockwise walks from
+    /// viewpoints on vertex heights, on the vertices' lattice and at random, with the arc
+    /// vertices and without them. Also checks that most arcs have one.
+    #[test]
+    fn arc_vertices_walk_as_the_tangents() {
+        let mut scenes: Vec<Scene> = (1..=10u64)
+            .map(|seed| random_scene(seed, 2 + (seed as i32 % 4)))
+            .collect();
+        scenes.push(boxes());
+        let (mut steps, mut arcs, mut bounded) = (0, 0, 0);
+        for (k, scene) in scenes.iter().enumerate() {
+            let s = scene.as_ref();
+            let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
+            let with = c.as_slices();
+            assert!(with.borders_ref().has_arcs());
+            let without = Complex {
+                borders: with.borders_ref().without_arcs(),
+                ..with.clone()
+            };
+            for (i, z) in c.cylinders().iter().enumerate() {
+                let id = CylinderId::from_index(i).unwrap();
+                let [b, t] = with.borders_ref().arcs(id);
+                bounded += usize::from(z.bottom.is_some()) + usize::from(z.top.is_some());
+                arcs += usize::from(b != NO_ARC_VERTEX) + usize::from(t != NO_ARC_VERTEX);
+            }
+            let mut points = viewpoints(scene, k as u64 + 7, 120);
+            points.extend(s.vertices().iter().map(|v| {
+                let v = v.to_query();
+                QueryPoint::from_raw(v.x() + (1 << 30), v.y()).unwrap()
+            }));
+            for q in points {
+                let Ok(start) = c.trace_start(&s, q) else {
+                    continue;
+                };
+                let full = Position {
+                    lap: 1,
+                    angle: Angle::ZERO,
+                };
+                for (end, ccw) in [(None, true), (Some(full), false)] {
+                    let mut a = Walker::<8>::new(q, Anchor::Point, start, Angle::ZERO, end, ccw);
+                    let mut b = a.clone();
+                    loop {
+                        let (x, y) = (a.next_step(&with, &s), b.next_step(&without, &s));
+                        match (x.unwrap(), y.unwrap()) {
+                            (Some(x), Some(y)) => {
+                                assert_eq!(x.angle.cmp_angle(&y.angle), Ordering::Equal);
+                                assert_eq!((x.vertex, x.ahead), (y.vertex, y.ahead));
+                                assert_eq!(x.cylinder, y.cylinder, "scene {k}, q = {q:?}");
+                                steps += 1;
+                            }
+                            (None, None) => break,
+                            (x, y) => panic!("scene {k}, q = {q:?}: {x:?} vs {y:?}"),
+                        }
+                    }
+                }
+            }
+        }
+        assert!(steps > 50_000, "{steps} steps");
+        assert!(
+            2 * arcs > bounded,
+            "{arcs} of {bounded} arcs have one vertex"
+        );
+    }
+
+    /// Every arc vertex kept is the tangent vertex of its chain in every direction strictly
+    /// inside the cylinder's θ-range, tried at the directions of all pairs of vertices and
+    /// the axes (cylinders round more than half a turn included).
+    #[test]
+    fn arc_vertices_are_the_chains_tangent_vertices() {
+        let mut scenes: Vec<Scene> = (1..=8u64).map(|seed| random_scene(seed, 3)).collect();
+        scenes.push(boxes());
+        let mut checked = 0;
+        for scene in &scenes {
+            let s = scene.as_ref();
+            let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
+            let n = s.vertices().len();
+            let mut directions: Vec<Angle> = (0..n * n)
+                .filter(|k| k / n != k % n)
+                .map(|k| Angle::of_pair(ranked(&s, k / n), ranked(&s, k % n)))
+                .collect();
+            directions.extend([Angle::ZERO.reversed()]);
+            for (i, z) in c.cylinders().iter().enumerate() {
+                let arcs = c.borders_ref().arcs(CylinderId::from_index(i).unwrap());
+                let left = c.wall_angle(&s, z.left).unwrap_or(Angle::ZERO);
+                let right = c.wall_angle(&s, z.right);
+                let inside = directions.iter().filter(|d| {
+                    d.cmp_angle(&left) == Ordering::Greater
+                        && right.is_none_or(|r| d.cmp_angle(&r) == Ordering::Less)
+                });
+                for d in inside {
+                    for (chain, v) in [z.bottom, z.top].into_iter().zip(arcs) {
+                        let (Some(chain), true) = (chain, v != NO_ARC_VERTEX) else {
+                            continue;
+                        };
+                        let t = crate::line_space::tangent_vertex(&s, chain.object, d, chain.bound);
+                        assert_eq!(t, v as usize, "cylinder {i} {z:?}, direction {d:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 50_000, "{checked}");
     }
 
     #[test]

@@ -2881,6 +2881,17 @@ mod tests {
         }
     }
 
+    /// A xorshift generator of integers uniform in `-m..=m`.
+    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    fn uniform(mut seed: u64) -> impl FnMut(i64) -> i64 {
+        move |m| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % (2 * m as u64 + 1)) as i64 - m
+        }
+    }
+
     /// Through an axis-parallel mirror edge, the reflected exact direction of a range end
     /// (`reflected`, `reflect_axis`) is the direction to the hit point from the virtual
     /// eye, as `map_end`'s general formula `sign(den)·((prev − next)·den + num·d)` has it.
@@ -2891,13 +2902,7 @@ mod tests {
         use crate::geom::wide::Wide;
         use crate::geom::Sign;
         use crate::walk::optics;
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |m: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % (2 * m as u64 + 1)) as i64 - m
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1du64);
         let mut compared = 0;
         for round in 0..2000 {
             let (x, y, len) = (
@@ -2964,13 +2969,7 @@ mod tests {
             complex: &c,
             scene: &s,
         };
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |m: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % (2 * m as u64 + 1)) as i64 - m
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15u64);
         let same = |r: (u64, u64), w: (Wide, Wide)| {
             let (x, y) = (w.0.residue(), w.1.residue());
             r == (x, y) || r == ((P - x) % P, (P - y) % P)

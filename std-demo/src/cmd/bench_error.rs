@@ -394,7 +394,9 @@ pub(crate) struct Measured {
 pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Failure> {
     a.check()?;
     let scene = *scene;
-    let complex = build_by_sweep(&scene).map_err(internal)?;
+    let complex = build_by_sweep(&scene)
+        .map_err(internal)?
+        .with_arc_vertices(&scene);
     let prepared = Prepared::new(&scene);
     let quadtree = Quadtree::new(&prepared);
     let bvh = BvhCaster::new(&prepared);
