@@ -137,7 +137,8 @@ impl World {
         let complex = build_by_sweep(&sub.as_ref())
             .map_err(|e| format!("{}: internal: cannot build the complex: {e}", self.name))?;
         self.build_seconds = start.elapsed().as_secs_f64();
-        self.complex = complex;
+        // Walked frame after frame: the arc-vertex index pays for itself.
+        self.complex = complex.with_arc_vertices(&sub.as_ref());
         self.ids = ids;
         self.screens_in_complex = screens_in_complex;
         self.generation += 1;
@@ -149,12 +150,14 @@ impl World {
     pub fn full_complex(&self) -> Result<&Complex, String> {
         self.full
             .get_or_init(|| {
-                build_by_sweep(&self.scene()).map_err(|e| {
-                    format!(
-                        "{}: internal: cannot build the complex with screens: {e}",
-                        self.name
-                    )
-                })
+                build_by_sweep(&self.scene())
+                    .map(|c| c.with_arc_vertices(&self.scene()))
+                    .map_err(|e| {
+                        format!(
+                            "{}: internal: cannot build the complex with screens: {e}",
+                            self.name
+                        )
+                    })
             })
             .as_ref()
             .map_err(Clone::clone)
