@@ -70,7 +70,8 @@ pub struct BordersRef<'a> {
     /// For every cylinder, the vertex of its bottom (`[0]`) and top (`[1]`) arc where that
     /// arc is one vertex's sinusoid ([`crate::line_space::arc_vertex`]; global index,
     /// [`NO_ARC_VERTEX`] otherwise): a walk takes its candidate exit there without the
-    /// tangents from the eye. Empty: not kept (walks use the tangents for every arc).
+    /// tangents from the eye. Empty unless kept by `Complex::with_arc_vertices` (walks then
+    /// use the tangents for every arc).
     arcs: &'a [[u32; 2]],
 }
 
@@ -210,7 +211,7 @@ pub(super) fn slot(chain: Chain, side: Side, layer: Layer) -> usize {
 }
 
 /// The tiling slots a cylinder appears in: below its top arc, above its bottom arc.
-fn arcs(c: &Cylinder) -> [Option<usize>; 2] {
+fn tiling_slots(c: &Cylinder) -> [Option<usize>; 2] {
     [(c.top, Side::Below), (c.bottom, Side::Above)]
         .map(|(chain, side)| chain.map(|ch| slot(ch, side, Layer::of(c, ch))))
 }
@@ -382,7 +383,7 @@ impl<'a> BordersRef<'a> {
             // A cylinder at θ = 0 goes in both slots of the index (the second one's
             // contents are replaced by the tree maxima).
             let zero = c.left == Wall::Zero;
-            let [top, bottom] = arcs(c).map(|s| s.filter(|&s| s < tilings));
+            let [top, bottom] = tiling_slots(c).map(|s| s.filter(|&s| s < tilings));
             let slots = [
                 top,
                 bottom,
@@ -789,10 +790,15 @@ fn zero_span(scene: &SceneRef<'_>, c: &Cylinder) -> (i64, i64) {
         c.bottom
             .and_then(|b| zero_height(scene, b))
             .unwrap_or(i64::MIN),
-        c.top
-            .and_then(|t| zero_height(scene, t))
-            .unwrap_or(i64::MAX),
+        zero_top(scene, c),
     )
+}
+
+/// The top of [`zero_span`] alone.
+fn zero_top(scene: &SceneRef<'_>, c: &Cylinder) -> i64 {
+    c.top
+        .and_then(|t| zero_height(scene, t))
+        .unwrap_or(i64::MAX)
 }
 
 /// Levels of the implicit tree over `len` nodes: the root is node `2^levels - 1`.
@@ -818,9 +824,7 @@ impl<'a, 's> ZeroIndex<'a, 's> {
     fn top(&self, id: CylinderId) -> i64 {
         self.cylinders
             .get(id.index())
-            .and_then(|c| c.top)
-            .and_then(|t| zero_height(&self.scene, t))
-            .unwrap_or(i64::MAX)
+            .map_or(i64::MAX, |c| zero_top(&self.scene, c))
     }
 
     /// Sorts `sorted` by bottom height and fills `maxima`, bottom-up.

@@ -538,8 +538,8 @@ impl CachedTangents {
 /// either direction (θ = 2π ccw, θ = 0 cw) without crossing it.
 ///
 /// A chain's candidate exit is the crossing at its tangent vertex from `q`; where the
-/// cylinder's arc on that chain is one vertex's sinusoid (the arc vertices derived on
-/// load, [`crate::partition::BordersRef`]) it is that vertex, without the tangents (see
+/// cylinder's arc on that chain is one vertex's sinusoid (the arc vertices kept by
+/// `Complex::with_arc_vertices`) it is that vertex, without the tangents (see
 /// [`Walker::candidate`]).
 ///
 /// `K` is the number of entries of the tangent cache (even): two-way set associative,
