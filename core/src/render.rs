@@ -1081,6 +1081,36 @@ struct Unfolded {
     wn: (f64, f64),
 }
 
+/// The first and the last level of a branch unfolded through mirrors (`last` `None`: the
+/// same level), read by [`Hits::unfolded_hit`].
+#[derive(Clone, Copy, Debug)]
+struct Ends {
+    first: Unfolded,
+    last: Option<Unfolded>,
+}
+
+impl Ends {
+    /// The hit along the unit ray `u` (crossing every entry edge): the distances to the
+    /// first and the last entry edge, and how squarely the ray meets the last.
+    #[inline]
+    fn hit(&self, u: (f64, f64)) -> Option<Hit> {
+        let distance = |lin: &Unfolded| {
+            let den = dot(lin.wd, u);
+            (den < 0.0).then(|| (lin.num / den).max(0.0))
+        };
+        let first = distance(&self.first)?;
+        let (length, lin) = match &self.last {
+            None => (first, &self.first),
+            Some(lin) => (distance(lin)?, lin),
+        };
+        Some(Hit {
+            first,
+            length,
+            facing: libm::fabs(dot(lin.wn, u)),
+        })
+    }
+}
+
 /// `Mᵀ·r` for the 2×2 matrix `m` (rows).
 fn mt(m: &[[f64; 2]; 2], r: (f64, f64)) -> (f64, f64) {
     (m[0][0] * r.0 + m[1][0] * r.1, m[0][1] * r.0 + m[1][1] * r.1)
@@ -1274,22 +1304,19 @@ impl Hits {
     /// crosses every entry edge): the distances to the first and the last entry edge.
     #[inline]
     fn unfolded_hit(&self, u: (f64, f64), last: usize) -> Option<Hit> {
-        let distance = |level: usize| {
-            let lin = self.levels.get(level)?.lin.as_ref()?;
-            let den = dot(lin.wd, u);
-            (den < 0.0).then(|| ((lin.num / den).max(0.0), lin))
+        self.ends(last)?.hit(u)
+    }
+
+    /// The linear forms of the unfolded levels `0` and `last` (`None` unless both are
+    /// unfolded): what [`Hits::unfolded_hit`] reads, taken out once for a run of columns.
+    #[inline]
+    fn ends(&self, last: usize) -> Option<Ends> {
+        let first = self.levels.first()?.lin?;
+        let last = match last {
+            0 => None,
+            l => Some(self.levels.get(l)?.lin?),
         };
-        let (first, lin) = distance(0)?;
-        let (length, lin) = if last == 0 {
-            (first, lin)
-        } else {
-            distance(last)?
-        };
-        Some(Hit {
-            first,
-            length,
-            facing: libm::fabs(dot(lin.wn, u)),
-        })
+        Some(Ends { first, last })
     }
 
     /// For the unit ray `u` through the unfolded levels `0..=last`: the one constraint of
@@ -1457,11 +1484,9 @@ pub fn centre_hits<I: Interval>(
     };
     let mut sweep = None;
     let e = camera.eye.to_f64();
-    // The interval whose branch the remembered levels unfold (`Hits::unfolds`), until the
-    // next call that may change the levels, and from its second column on the constraint
-    // that fails first clockwise (`Hits::first_to_fail`): its later columns take one test
-    // and the distances.
-    let mut run: Option<(usize, Option<(f64, f64)>)> = None;
+    // The interval whose branch the remembered levels unfold, until the next call that may
+    // change the levels: its later columns take one test and the distances.
+    let mut run: Option<Run> = None;
     for (c, centre) in camera.centre_vectors().enumerate() {
         let k = if intervals.is_empty() {
             0
@@ -1480,15 +1505,15 @@ pub fn centre_hits<I: Interval>(
         // Whether `Hits::unfolded` is still worth trying: not after the constraint that
         // fails first failed (or a distance's `den < 0`, which it checks too).
         let mut unfolded = true;
-        if let Some((i, limit)) = &mut run {
-            if *i == k {
+        if let Some(r) = &mut run {
+            if r.interval == k {
                 let fast = unit_ray(dir).and_then(|u| {
-                    let q = match limit {
-                        Some(q) => *q,
-                        None => *limit.insert(hits.first_to_fail(u, last)?),
+                    let q = match r.limit {
+                        Some(q) => q,
+                        None => *r.limit.insert(hits.first_to_fail(u, last)?),
                     };
                     unfolded = false;
-                    (dot(q, u) >= 0.0).then(|| hits.unfolded_hit(u, last))?
+                    (dot(q, u) >= 0.0).then(|| r.ends.hit(u))?
                 });
                 if fast.is_some() {
                     each(c, k, fast);
@@ -1498,9 +1523,24 @@ pub fn centre_hits<I: Interval>(
         }
         // As before the shortcut: `Hits::unfolded`, then the walk.
         let (hit, unfolds) = hits.along_from(scene, camera.eye, e, dir, branch, unfolded);
-        run = unfolds.then_some((k, None));
+        run = unfolds.then(|| hits.ends(last)).flatten().map(|ends| Run {
+            interval: k,
+            ends,
+            limit: None,
+        });
         each(c, k, hit);
     }
+}
+
+/// A run of columns of one interval whose branch the remembered levels unfold through
+/// mirrors ([`Hits::unfolds`]), in [`centre_hits`].
+struct Run {
+    interval: usize,
+    /// The levels' ends, read once for the run.
+    ends: Ends,
+    /// From the run's second column, the constraint that fails first clockwise
+    /// ([`Hits::first_to_fail`]).
+    limit: Option<(f64, f64)>,
 }
 
 /// `|(x, y)|` for output: the components stay far below 2⁵¹¹ (scene coordinates and

@@ -46,7 +46,7 @@ use crate::scene::{Material, ObjectId, SceneRef};
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 use {
     crate::line_space::{object_ahead_of_query, ranked, Bound, Chain},
-    crate::partition::{Cylinder, Layer, Side, Wall},
+    crate::partition::{Cylinder, Layer, Side, Wall, NO_ARC_VERTEX},
 };
 // Changes of eye (mirrors and refractive objects).
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
@@ -1696,7 +1696,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             let Some(t) = c.top else {
                 return self.contains_after(q, f, c, true, &[crossed]).then_some(id);
             };
-            let side = self.chain_after(q, f, t, true);
+            let side = self.arc_after(q, f, (id, t, true), true);
             if side == Sign::Positive {
                 let known = [crossed, (t, side)];
                 return self.contains_after(q, f, c, true, &known).then_some(id);
@@ -1767,6 +1767,29 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             none
         }
+    }
+
+    /// [`Tree::chain_after`] for the arc of cylinder `c` (`top` or bottom) at `from` inside
+    /// `c`'s θ-range (its closure, exactly). Where the arc is one vertex's sinusoid
+    /// ([`crate::partition::NO_ARC_VERTEX`] otherwise) that vertex is an extreme one of the
+    /// chain's object along every direction of the closed range, so a line through it off
+    /// the eye's line puts the whole chain on that side: one cross product instead of one
+    /// per vertex. On the line, the full rule.
+    fn arc_after(
+        &self,
+        eye: QueryPoint,
+        from: &Angle,
+        (id, chain, top): (CylinderId, Chain, bool),
+        ccw: bool,
+    ) -> Sign {
+        let v = self.complex.borders_ref().arcs(id)[usize::from(top)];
+        if v != NO_ARC_VERTEX {
+            match Sign::of_i128(cross_q(from.vector(), self.qpoint(v as usize), eye)) {
+                Sign::Zero => {}
+                s => return s,
+            }
+        }
+        self.chain_after(eye, from, chain, ccw)
     }
 
     /// The cylinder with floor `m` containing the line through `eye` just after the range
@@ -1900,19 +1923,24 @@ impl<S: Storage> Tree<'_, '_, S> {
         from: &Angle,
         ccw: bool,
     ) -> Option<CylinderId> {
-        // Climb from the end of `m`'s sheet nearer to the eye's line: an `f64` estimate
-        // only picks the end, either climb is exact.
-        let up = self.nearer_lower(eye, m, from);
-        let (start, side, inward) = if up {
-            (Bound::Lower, Side::Above, Sign::Negative)
+        // Climb from the end of `m`'s sheet nearer to the eye's line (either climb is
+        // exact); that end's vertex line off the eye's line is the side of its chain.
+        let (lo, hi) = self.extremes(eye, m, from)?;
+        let up = -lo <= hi;
+        let (start, side, inward, end) = if up {
+            (Bound::Lower, Side::Above, Sign::Negative, lo)
         } else {
-            (Bound::Upper, Side::Below, Sign::Positive)
+            (Bound::Upper, Side::Below, Sign::Positive, hi)
         };
         let first = Chain {
             object: m,
             bound: start,
         };
-        if self.chain_after(eye, from, first, ccw) != inward {
+        let first_side = match Sign::of_i128(end) {
+            Sign::Zero => self.chain_after(eye, from, first, ccw),
+            s => s,
+        };
+        if first_side != inward {
             return None;
         }
         // The tilings are searched at the perturbed angle, on the turned line's lap (none
@@ -1935,7 +1963,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return None;
             }
             let (next, next_side) = match if up { c.top } else { c.bottom } {
-                Some(t) => match self.chain_after(eye, from, t, ccw) {
+                Some(t) => match self.arc_after(eye, from, (id, t, up), ccw) {
                     s if s != inward.flip() => (t, s),
                     s => {
                         let known = [crossed, (t, s)];
@@ -1965,23 +1993,19 @@ impl<S: Storage> Tree<'_, '_, S> {
         None
     }
 
-    /// Whether the eye's line at `from` lies nearer (in `f64`) to `m`'s lower chain than to
-    /// its upper one.
-    fn nearer_lower(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> bool {
+    /// The least and greatest `cross(d, v − eye)` over the vertices `v` of `m`, `d` the
+    /// direction of `from`: the lines of `m`'s lower and upper chains against the eye's
+    /// line (`None`: no such object). Bit budget as [`cross_q`].
+    fn extremes(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> Option<(i128, i128)> {
         let d = from.vector();
-        let d = (to_f64(d.0), to_f64(d.1));
-        let Some(obj) = self.scene.object(m) else {
-            return true;
-        };
-        let (lo, hi) = (obj.first_vertex()..obj.first_vertex() + obj.len())
-            .map(|v| {
-                let w = diff(self.qpoint(v), eye);
-                d.0 * to_f64(w.1) - d.1 * to_f64(w.0)
+        let obj = self.scene.object(m)?;
+        let first = obj.first_vertex();
+        (first..first + obj.len())
+            .map(|v| cross_q(d, self.qpoint(v), eye))
+            .fold(None, |acc, c| match acc {
+                None => Some((c, c)),
+                Some((lo, hi)) => Some((c.min(lo), c.max(hi))),
             })
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), u| {
-                (lo.min(u), hi.max(u))
-            });
-        -lo <= hi
     }
 
     /// [`Tree::stack_floor`] by a scan over the cylinders: O(cylinders), for the
@@ -2621,6 +2645,11 @@ impl Split {
                 {
                     best = Some((key, edge, start, end, k));
                 }
+                // A piece from the start of the range (no start vertex) comes first: every
+                // other piece starts strictly inside the range.
+                if start.is_none() {
+                    break;
+                }
             }
             best
         };
@@ -3138,5 +3167,96 @@ mod tests {
             fallbacks * 4 < routes.iter().sum::<usize>(),
             "{fallbacks} {routes:?}"
         );
+    }
+
+    /// The side of a cylinder's arc taken at its arc vertex (`Tree::arc_after`) is the
+    /// chain's side by all its vertices (`Tree::chain_after`), at the walls' angles and
+    /// between them, from eyes all around.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    #[test]
+    fn arc_vertex_side_is_the_chains() {
+        use super::Tree;
+        use crate::geom::predicates::Direction;
+        use crate::geom::sos::Angle;
+        use crate::partition::{CylinderId, Wall, NO_ARC_VERTEX};
+        let tri = |x: i32, y: i32| {
+            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
+            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
+        };
+        let objects = [
+            rect(-9, -2, -7, 3),
+            tri(2, 5),
+            rect(4, -6, 9, -5),
+            tri(-5, -9),
+            rect(6, 1, 7, 8),
+        ];
+        let s = Scene::new(objects.iter().map(|p| (Material::Opaque, p.as_slice()))).unwrap();
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
+        let tree = Tree {
+            complex: &c,
+            scene: &s,
+        };
+        let mut next = uniform(11);
+        let (mut by_arc, mut on_line) = (0, 0);
+        for (i, cyl) in c.cylinders().iter().enumerate() {
+            let id = CylinderId::from_index(i).unwrap();
+            let (Wall::Vertex(_), Wall::Vertex(_)) = (cyl.left, cyl.right) else {
+                continue;
+            };
+            let (l, r) = (
+                c.wall_angle(&s, cyl.left).unwrap(),
+                c.wall_angle(&s, cyl.right).unwrap(),
+            );
+            let mut angles = alloc::vec![l, r];
+            // Between the walls: the sum of their directions, for a range under a half turn.
+            let (lv, rv) = (l.vector(), r.vector());
+            if lv.0 * rv.1 - lv.1 * rv.0 > 0 {
+                let d = Direction::new((lv.0 + rv.0) as i64, (lv.1 + rv.1) as i64).unwrap();
+                angles.push(Angle::constant(d));
+            }
+            let arcs = c.borders_ref().arcs(id);
+            for (top, chain) in [(false, cyl.bottom), (true, cyl.top)] {
+                let Some(chain) = chain else { continue };
+                let v = arcs[usize::from(top)];
+                if v == NO_ARC_VERTEX {
+                    continue;
+                }
+                for a in &angles {
+                    // Random eyes, and eyes on the line through the arc vertex.
+                    for k in 0..8 {
+                        let q = if k < 2 {
+                            let p = tree.qpoint(v as usize);
+                            let (dx, dy) = a.vector();
+                            let t = next(3) as i128;
+                            QueryPoint::from_raw(
+                                (p.x() as i128 + t * dx) as i64,
+                                (p.y() as i128 + t * dy) as i64,
+                            )
+                        } else {
+                            QueryPoint::from_f64(
+                                next(1200) as f64 / 100.0,
+                                next(1200) as f64 / 100.0,
+                            )
+                            .ok()
+                        };
+                        let Some(q) = q else { continue };
+                        for ccw in [true, false] {
+                            let s_arc = tree.arc_after(q, a, (id, chain, top), ccw);
+                            assert_eq!(
+                                s_arc,
+                                tree.chain_after(q, a, chain, ccw),
+                                "{i} {a:?} {q:?}"
+                            );
+                            match super::cross_q(a.vector(), tree.qpoint(v as usize), q) {
+                                0 => on_line += 1,
+                                _ => by_arc += 1,
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(by_arc > 1000 && on_line > 100, "{by_arc} {on_line}");
     }
 }
