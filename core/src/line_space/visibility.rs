@@ -408,22 +408,14 @@ impl Heap {
     }
 }
 
-/// A cylinder slot: the cylinder as an interval (floor, ceiling, bottom and top chain).
-/// Slots of closed cylinders are reused, so the table stays as small as the cross-section
-/// (about 3n + 1) and in cache.
-#[derive(Clone, Copy, Debug)]
-struct Slot {
-    interval: Interval,
-    open: bool,
-}
-
 /// The open cylinders, indexed by bottom and by top chain, and the heap of their pinch
 /// candidates.
 struct Kinetic<'s, 'a> {
     scene: &'s SceneRef<'a>,
-    cylinders: Vec<Slot>,
-    /// Slots of closed cylinders.
-    free: Vec<u32>,
+    /// Per cylinder slot: the open cylinder as an interval (floor, ceiling, bottom and top
+    /// chain). A vertex's three opened cylinders take the slots of the three it closes, so
+    /// the table stays as large as the cross-section (3n + 1) and in cache.
+    cylinders: Vec<Interval>,
     /// Per chain (`2·object + bound`): the open cylinders whose bottom arc is on it.
     by_bottom: Vec<[u32; 2]>,
     /// Per chain: the open cylinders whose top arc is on it.
@@ -460,7 +452,6 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         let mut k = Kinetic {
             scene,
             cylinders: Vec::new(),
-            free: Vec::new(),
             by_bottom: alloc::vec![[EMPTY; 2]; 2 * n],
             by_top: alloc::vec![[EMPTY; 2]; 2 * n],
             heap: Heap::default(),
@@ -477,7 +468,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         // The cylinders at θ = 0 with their slots, for the check at θ = 2π.
         let mut initial: Vec<(Interval, u32)> = Vec::new();
         for (i, iv) in cross_section(scene, &Angle::ZERO).into_iter().enumerate() {
-            let slot = k.open_cylinder(iv, None)?;
+            let slot = k.open_initial(iv)?;
             events.initial(slot, &iv)?;
             initial.push((iv, u32::try_from(i).ok()?));
         }
@@ -497,8 +488,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
             .cylinders
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.open)
-            .map(|(slot, c)| Some((c.interval, u32::try_from(slot).ok()?)))
+            .map(|(slot, c)| Some((*c, u32::try_from(slot).ok()?)))
             .collect::<Option<_>>()?;
         last.sort_unstable_by_key(|c| key(&c.0));
         initial.sort_unstable_by_key(|c| key(&c.0));
@@ -511,38 +501,47 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         Some(())
     }
 
-    /// Opens a cylinder and queues its pinch candidate if that comes after `after` (the
-    /// vertex at its left wall; `None`: θ = 0), in place of the candidate of the cylinder
-    /// closed in its slot. Returns its slot.
-    fn open_cylinder(&mut self, c: Interval, after: Option<&Event>) -> Option<u32> {
-        let id = match self.free.last() {
-            Some(&id) => id,
-            None => u32::try_from(self.cylinders.len())
-                .ok()
-                .filter(|&i| i != EMPTY)?,
-        };
-        let same = |o: &Slot| o.interval.floor == c.floor && o.interval.ceiling == c.ceiling;
+    /// Opens cylinder `c` at θ = 0 in a new slot and queues its pinch candidate; returns
+    /// its slot.
+    fn open_initial(&mut self, c: Interval) -> Option<u32> {
+        let id = u32::try_from(self.cylinders.len())
+            .ok()
+            .filter(|&i| i != EMPTY)?;
         for (chain, index) in [(c.bottom, &mut self.by_bottom), (c.top, &mut self.by_top)] {
             let Some(chain) = chain else { continue };
-            let slots = index.get_mut(chain_index(chain))?;
-            // One cylinder per (chain, floor, ceiling): the sweep's keys.
-            let clash = slots
-                .iter()
-                .any(|&s| s != EMPTY && self.cylinders.get(s as usize).is_none_or(&same));
-            let slot = slots.iter_mut().find(|s| **s == EMPTY);
-            match (clash, slot) {
-                (false, Some(slot)) => *slot = id,
-                _ => return None,
+            let slot = index
+                .get_mut(chain_index(chain))?
+                .iter_mut()
+                .find(|s| **s == EMPTY)?;
+            *slot = id;
+        }
+        self.cylinders.push(c);
+        self.check_keys(id)?;
+        self.queue(id, None)?;
+        Some(id)
+    }
+
+    /// Checks the sweep's keys at the open cylinder in `slot`: no other open cylinder on
+    /// its bottom or top chain has its floor and ceiling.
+    fn check_keys(&self, slot: u32) -> Option<()> {
+        let c = self.cylinders.get(slot as usize)?;
+        let same = |o: &Interval| o.floor == c.floor && o.ceiling == c.ceiling;
+        for (chain, index) in [(c.bottom, &self.by_bottom), (c.top, &self.by_top)] {
+            let Some(chain) = chain else { continue };
+            let clash = index.get(chain_index(chain))?.iter().any(|&s| {
+                s != EMPTY && s != slot && self.cylinders.get(s as usize).is_none_or(same)
+            });
+            if clash {
+                return None;
             }
         }
-        let slot = Slot {
-            interval: c,
-            open: true,
-        };
-        match self.free.pop() {
-            Some(_) => *self.cylinders.get_mut(id as usize)? = slot,
-            None => self.cylinders.push(slot),
-        }
+        Some(())
+    }
+
+    /// Queues the pinch candidate of the cylinder in `slot` if that comes after `after`
+    /// (the vertex at its left wall; `None`: θ = 0), in place of the slot's previous one.
+    fn queue(&mut self, slot: u32, after: Option<&Event>) -> Option<()> {
+        let c = *self.cylinders.get(slot as usize)?;
         let mut candidate = None;
         if let (Some(bottom), Some(top)) = (c.bottom, c.top) {
             if let Some((p, q)) = self.chain_bitangent(bottom, top)? {
@@ -554,8 +553,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
                 candidate = later.then_some(e);
             }
         }
-        self.heap.set(id, candidate)?;
-        Some(id)
+        self.heap.set(slot, candidate)
     }
 
     /// [`chain_bitangent`], remembered ([`MEMO`]); `None` for a chain out of range.
@@ -578,26 +576,6 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         Some(b)
     }
 
-    /// Closes a cylinder. Its candidate stays queued until the cylinder opened in its slot
-    /// replaces it: a vertex closes three cylinders and opens three in the same slots (the
-    /// free list is a stack), and a stale candidate that surfaced would fail `vertex`.
-    fn close(&mut self, id: usize) -> Option<Interval> {
-        let slot = self.cylinders.get_mut(id)?;
-        if !slot.open {
-            return None;
-        }
-        slot.open = false;
-        let c = slot.interval;
-        self.free.push(u32::try_from(id).ok()?);
-        for (chain, index) in [(c.bottom, &mut self.by_bottom), (c.top, &mut self.by_top)] {
-            let Some(chain) = chain else { continue };
-            let slots = index.get_mut(chain_index(chain))?;
-            let slot = slots.iter_mut().find(|s| **s as usize == id)?;
-            *slot = EMPTY;
-        }
-        Some(c)
-    }
-
     /// The open cylinder on `chain` (by bottom or top) whose floor and ceiling match the
     /// corner; among several, the smallest (floor, ceiling), as the sweep's ordered map.
     fn find(&self, by_top: bool, chain: Chain, corner: Corner, b: &Bitangent) -> Option<usize> {
@@ -608,7 +586,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         };
         let [x, y] = *index.get(chain_index(chain))?;
         let face = |s: u32| {
-            let c = self.cylinders.get(s as usize)?.interval;
+            let c = *self.cylinders.get(s as usize)?;
             corner
                 .matches(b, c.floor, c.ceiling)
                 .then_some((s as usize, (c.floor, c.ceiling)))
@@ -624,7 +602,7 @@ impl<'s, 'a> Kinetic<'s, 'a> {
     /// cylinders right of it; reports it to `events`.
     fn vertex<E: Events>(&mut self, cylinder: u32, event: &Event, events: &mut E) -> Option<()> {
         let left_id = cylinder as usize;
-        let left = self.cylinders.get(left_id).filter(|c| c.open)?.interval;
+        let left = *self.cylinders.get(left_id)?;
         let (cp, cq) = (left.bottom?, left.top?);
         let b = Bitangent {
             first_object: cp.object,
@@ -645,7 +623,8 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         if l != left_id || t == d || t == l || d == l {
             return None;
         }
-        let (ct, cd, cl) = (self.close(t)?, self.close(d)?, self.close(l)?);
+        let interval = |s: usize| self.cylinders.get(s).copied();
+        let (ct, cd, cl) = (interval(t)?, interval(d)?, interval(l)?);
 
         // The right wedge's face, from the floors and ceilings just closed.
         let closed = [ct, cd, cl].map(|c| (c.floor, c.ceiling));
@@ -666,15 +645,44 @@ impl<'s, 'a> Kinetic<'s, 'a> {
                 top: Some(cp),
             },
         ];
-        let mut slots = [0; 3];
-        for (slot, c) in slots.iter_mut().zip(opened) {
-            *slot = self.open_cylinder(c, Some(event))?;
+        // Slot ids are below `EMPTY` (`open_initial`), so they fit `u32`.
+        let [t, d, l] = [t, d, l].map(|s| s as u32);
+        // The opened cylinders take the closed ones' slots: right of the top wedge l's,
+        // right of the bottom wedge d's, the right wedge t's. Their bottom chains are those
+        // of the closed cylinders in these slots (P's, d's, Q's), so the bottom-chain index
+        // stays; their top chains (t's, Q's, P's) are those of t, l and d, so on those
+        // chains the top-chain index moves t to l, l to d and d to t.
+        let slots = [l, d, t];
+        let mut chains = [ct.top, Some(cq), Some(cp)];
+        for k in 0..chains.len() {
+            let Some(chain) = chains.get_mut(k).and_then(Option::take) else {
+                continue;
+            };
+            // Each chain once (two of them may coincide).
+            for other in chains.iter_mut().skip(k) {
+                if *other == Some(chain) {
+                    *other = None;
+                }
+            }
+            for s in self.by_top.get_mut(chain_index(chain))? {
+                *s = match *s {
+                    x if x == t => l,
+                    x if x == l => d,
+                    x if x == d => t,
+                    x => x,
+                };
+            }
         }
-        // Slot ids are below `EMPTY` (`open_cylinder`), so they fit `u32`.
-        let closed = [t, d, l].map(|s| s as u32);
+        for (slot, c) in slots.into_iter().zip(opened) {
+            *self.cylinders.get_mut(slot as usize)? = c;
+        }
+        for slot in slots {
+            self.check_keys(slot)?;
+            self.queue(slot, Some(event))?;
+        }
         events.vertex(
             &b,
-            closed,
+            [t, d, l],
             [
                 (slots[0], opened[0]),
                 (slots[1], opened[1]),
@@ -752,6 +760,24 @@ mod tests {
                 let slow = sorted(&s, free_bitangents_brute_force(&s));
                 assert_eq!(fast, slow, "{c}x{c} seed {seed}");
             }
+        }
+    }
+
+    /// The derived state the rotational sweep builds as it goes is the one every complex
+    /// gets rebuilt (`Complex::new_owned`).
+    #[test]
+    fn sweep_borders_match_the_rebuilt_ones() {
+        let scenes = (1..=5)
+            .flat_map(|c| (0..4).map(move |seed| coarse_grid(c, seed)))
+            .chain(
+                [(1, 1, 2, 1), (3, 3, 2, 1), (4, 2, 3, 1)].map(|(c, r, s, g)| boxes(c, r, s, g)),
+            );
+        for scene in scenes {
+            let s = scene.as_ref();
+            let c = crate::partition::build_by_sweep(&s).expect("a valid scene");
+            let rebuilt =
+                crate::partition::Complex::new_owned(c.vertices.clone(), c.cylinders.clone(), &s);
+            assert!(c.borders.same_as(&rebuilt.borders));
         }
     }
 

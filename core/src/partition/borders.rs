@@ -242,6 +242,141 @@ pub(crate) fn build(scene: &SceneRef<'_>, complex: &Complex) -> Borders {
     b
 }
 
+/// The derived state written as the rotational sweep numbers the cylinders (the replay's
+/// order: by left wall), instead of [`build`]'s sort and merge afterwards: a cylinder's
+/// place in each of its tilings is the count of that tiling so far, and once every
+/// cylinder up to its left wall is counted, its start index on each far side is the last
+/// cylinder counted there (the cylinder containing its left wall). Equal to [`build`] on
+/// the same complex (tested); [`build`] stays the state of every loaded complex.
+#[cfg(feature = "alloc")]
+pub(crate) struct SweepBorders {
+    objects: usize,
+    /// `counts[s + 1]`: cylinders in slot `s` so far (12 tiling slots per object, then the
+    /// two of the θ = 0 index); the prefix sums become the offsets.
+    counts: Vec<u32>,
+    /// Per cylinder: its two tiling slots (`u32::MAX`: none) and its place in each.
+    places: Vec<[(u32, u32); 2]>,
+    start: Vec<[[u32; 2]; 2]>,
+}
+
+#[cfg(feature = "alloc")]
+impl SweepBorders {
+    pub(crate) fn new(objects: usize) -> SweepBorders {
+        SweepBorders {
+            objects,
+            counts: alloc::vec![0; 12 * objects + 3],
+            places: Vec::new(),
+            start: Vec::new(),
+        }
+    }
+
+    /// Counts the next cylinders, all with one left wall, later than every one counted
+    /// before (ids in order), and sets their start indices.
+    pub(crate) fn add(&mut self, group: &[Cylinder]) {
+        let tilings = 12 * self.objects;
+        for c in group {
+            let mut places = [(u32::MAX, 0); 2];
+            // Below its top arc, above its bottom arc (`tiling_slots`).
+            for (place, (chain, side)) in places
+                .iter_mut()
+                .zip([(c.top, Side::Below), (c.bottom, Side::Above)])
+            {
+                let Some(chain) = chain else { continue };
+                let s = slot(chain, side, Layer::of(c, chain));
+                if s >= tilings {
+                    continue;
+                }
+                if let Some(n) = self.counts.get_mut(s + 1) {
+                    *place = (s as u32, *n);
+                    *n += 1;
+                }
+            }
+            if c.left == Wall::Zero {
+                for s in [tilings, tilings + 1] {
+                    if let Some(n) = self.counts.get_mut(s + 1) {
+                        *n += 1;
+                    }
+                }
+            }
+            self.places.push(places);
+        }
+        for c in group {
+            let start = far_starts(c, self.objects, &self.counts);
+            self.start.push(start);
+        }
+    }
+
+    /// The derived state of the complex with these vertices (sorted by θ) and cylinders
+    /// (every one added).
+    pub(crate) fn finish(
+        self,
+        scene: &SceneRef<'_>,
+        vertices: &[Vertex],
+        cylinders: &[Cylinder],
+    ) -> Borders {
+        let SweepBorders {
+            objects,
+            counts: mut offsets,
+            places,
+            start,
+            ..
+        } = self;
+        let mut sum = 0u32;
+        for o in offsets.iter_mut() {
+            sum = sum.saturating_add(*o);
+            *o = sum;
+        }
+        let mut ids = alloc::vec![CylinderId::ZERO; sum as usize];
+        let zero = 12 * objects;
+        // Places in the θ = 0 index: the cylinders at θ = 0 in id order.
+        let mut at_zero = 0u32;
+        for (i, (places, c)) in places.iter().zip(cylinders).enumerate() {
+            let Some(id) = CylinderId::from_index(i) else {
+                break;
+            };
+            let mut index = [(u32::MAX, 0); 2];
+            if c.left == Wall::Zero {
+                index = [(zero as u32, at_zero), (zero as u32 + 1, at_zero)];
+                at_zero += 1;
+            }
+            for (s, k) in places.iter().chain(&index) {
+                let at = offsets.get(*s as usize).map(|&o| o as usize + *k as usize);
+                if let Some(slot) = at.and_then(|a| ids.get_mut(a)) {
+                    *slot = id;
+                }
+            }
+        }
+        let (head, tail) = ids.split_at_mut(range(&offsets, zero + 1).map_or(0, |r| r.start));
+        if let (Some(sorted), Some(maxima)) = (
+            range(&offsets, zero).and_then(|r| head.get_mut(r)),
+            range(&offsets, zero + 1).and_then(|r| tail.get_mut(..r.len())),
+        ) {
+            ZeroIndex::build(scene, cylinders, sorted, maxima);
+        }
+        Borders {
+            angles: vertices.iter().map(|v| v.bitangent.angle(scene)).collect(),
+            ids,
+            offsets,
+            start,
+            arcs: Vec::new(),
+        }
+    }
+}
+
+#[cfg(all(test, feature = "alloc"))]
+impl Borders {
+    /// Whether both states are the same (angles by their exact comparison).
+    pub(crate) fn same_as(&self, other: &Borders) -> bool {
+        self.ids == other.ids
+            && self.offsets == other.offsets
+            && self.start == other.start
+            && self.arcs == other.arcs
+            && self.angles.len() == other.angles.len()
+            && (self.angles.iter().zip(&other.angles))
+                .all(|(a, b)| a.cmp_angle(b) == Ordering::Equal)
+    }
+}
+
 #[cfg(feature = "alloc")]
 impl Borders {
     /// Keeps the arc vertices of `complex` (this state's complex): see
@@ -594,6 +729,39 @@ fn right_rank(w: Wall) -> usize {
         Wall::Zero => usize::MAX,
         Wall::Vertex(v) => v.index(),
     }
+}
+
+/// The start indices of cylinder `c` (see [`BordersRef`]) from the counts of the tilings
+/// of a scene of `objects` objects (`counts[s + 1]`: tiling `s`) once every cylinder with a
+/// left wall up to `c`'s is counted, in left-wall order: on each far side, the last one
+/// counted (0 where none, or where `c` is in no tiling of that arc, as the merge of
+/// [`BordersRef::rebuild_into`] leaves them).
+#[cfg(feature = "alloc")]
+fn far_starts(c: &Cylinder, objects: usize, counts: &[u32]) -> [[u32; 2]; 2] {
+    let mut out = [[0; 2]; 2];
+    let count = |s: usize| counts.get(s + 1).map_or(0, |n| n.saturating_sub(1));
+    for (entry, (chain, own_side, far_side)) in out.iter_mut().zip([
+        (c.bottom, Side::Above, Side::Below),
+        (c.top, Side::Below, Side::Above),
+    ]) {
+        let Some(chain) = chain else { continue };
+        if chain.object.0 as usize >= objects {
+            continue;
+        }
+        // `c` is in its own side's tiling (else the merge leaves it at 0); the far side has
+        // the layers before and after the object where it is crossed, else the one around.
+        *entry = match far_layer_index(chain, own_side, Layer::of(c, chain)) {
+            None => continue,
+            Some(_) if far_layer_index(chain, far_side, Layer::Around).is_some() => {
+                [count(slot(chain, far_side, Layer::Around)), 0]
+            }
+            Some(_) => [
+                count(slot(chain, far_side, Layer::Before)),
+                count(slot(chain, far_side, Layer::After)),
+            ],
+        };
+    }
+    out
 }
 
 /// The position of `layer` in [`far_layers`]`(chain, side)` (`None`: not one of them),

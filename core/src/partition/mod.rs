@@ -216,6 +216,22 @@ impl Complex {
         complex
     }
 
+    /// An owned complex from its vertices (sorted by θ), cylinders and their derived state,
+    /// built by the construction as it went (the rotational sweep); equal to what
+    /// [`Complex::new_owned`] rebuilds.
+    pub(crate) fn with_borders(
+        vertices: alloc::vec::Vec<Vertex>,
+        cylinders: alloc::vec::Vec<Cylinder>,
+        borders: Borders,
+    ) -> Complex {
+        Complex {
+            vertices,
+            cylinders,
+            borders,
+            region: None,
+        }
+    }
+
     /// The same complex with its walk index of arc vertices: for every cylinder, the
     /// vertex of its bottom and top arc where that arc is one vertex's sinusoid over the
     /// cylinder's θ-range (8 bytes per cylinder). Walks (views, ray trees) then take the

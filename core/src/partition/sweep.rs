@@ -7,7 +7,9 @@
 //!
 //! The sweep is the output-sensitive kinetic sweep of [`crate::line_space::free_bitangents`]
 //! (O((n + V) log n)), which finds each vertex together with the cylinders it closes and
-//! opens: the partition is written as it goes ([`Partition`]), each event in O(1). If one
+//! opens: the partition is written as it goes ([`Partition`]), each event in O(1), and so is
+//! the complex's derived state (the tilings and start indices of `borders`, which the
+//! replay's numbering by left wall lets it count on the way instead of sorting). If one
 //! of the kinetic sweep's invariants fails, the vertices come from the O(n³) brute force
 //! instead and [`super::replay`] (the loop shared with the reader of version-3 files) finds
 //! the cylinders. The randomized incremental construction with history (§4 of the paper)
@@ -15,6 +17,7 @@
 
 use alloc::vec::Vec;
 
+use super::borders::SweepBorders;
 use super::replay::{open_slots, replay, ReplayError, BLANK, ZERO_SLOTS};
 use super::{Complex, Cylinder, CylinderId, Vertex, VertexId, Wall};
 use crate::geom::sos::Angle;
@@ -25,13 +28,14 @@ use crate::partition::ComplexError;
 use crate::scene::SceneRef;
 
 /// The partition as the kinetic sweep reports it: the replay's numbering (the cylinders at
-/// θ = 0 first, then the three opened by each vertex in θ order), its walls and links.
-#[derive(Default)]
+/// θ = 0 first, then the three opened by each vertex in θ order), its walls and links, and
+/// the complex's derived state, which that numbering lets it build on the way.
 struct Partition {
     vertices: Vec<Vertex>,
     cylinders: Vec<Cylinder>,
     /// Per slot of the kinetic sweep: the cylinder open in it.
     open: Vec<CylinderId>,
+    borders: SweepBorders,
 }
 
 /// A cylinder with this interval, its walls θ = 0 and no neighbours yet.
@@ -75,6 +79,10 @@ impl Events for Partition {
         closed: [u32; 3],
         opened: [(u32, Interval); 3],
     ) -> Option<()> {
+        // The cylinders at θ = 0, all there by the first vertex.
+        if self.vertices.is_empty() {
+            self.borders.add(&self.cylinders);
+        }
         let wall = Wall::Vertex(VertexId::from_index(self.vertices.len())?);
         self.vertices.push(Vertex { bitangent: *b });
         // Read before the opened cylinders take the closed ones' slots.
@@ -96,6 +104,7 @@ impl Events for Partition {
             });
             self.set_open(*slot, id?)?;
         }
+        self.borders.add(self.cylinders.get(first..)?);
         Some(())
     }
 
@@ -110,13 +119,25 @@ impl Events for Partition {
 
 /// Builds the canonical cylindrical partition of a validated scene.
 pub fn build_by_sweep(scene: &SceneRef<'_>) -> Result<Complex, ComplexError> {
-    let mut partition = Partition::default();
+    let mut partition = Partition {
+        vertices: Vec::new(),
+        cylinders: Vec::new(),
+        open: Vec::new(),
+        borders: SweepBorders::new(scene.len()),
+    };
     if kinetic_sweep(scene, &mut partition).is_some() {
-        return Ok(Complex::new_owned(
-            partition.vertices,
-            partition.cylinders,
-            scene,
-        ));
+        let Partition {
+            vertices,
+            cylinders,
+            mut borders,
+            ..
+        } = partition;
+        // Without vertices, the cylinders at θ = 0 are still to count.
+        if vertices.is_empty() {
+            borders.add(&cylinders);
+        }
+        let borders = borders.finish(scene, &vertices, &cylinders);
+        return Ok(Complex::with_borders(vertices, cylinders, borders));
     }
     let vertices: Vec<Vertex> = free_bitangents_by_definition(scene)
         .into_iter()
