@@ -51,8 +51,10 @@
 //! object met are computed once per insertion, grouped by the pair of chains they join (an
 //! event search reads only the group that can fit). The replacement intervals derived from the chain carry the chain
 //! indices they cover, so each chain cylinder is linked to exactly the intervals over it;
-//! an interval whose shape an event leaves as it was (at the same index, when their
-//! number stays) keeps its cylinder, and only the others are sorted and matched by shape.
+//! an interval whose shape an event leaves as it was (at the same index when their
+//! number stays, else at the same place from either end of its section: the ends, the
+//! `(F, N)` runs, the `(N, G)` runs) keeps its cylinder, and only the others are sorted
+//! and matched by shape.
 //! The order of N and an arc's object along the lines (one offset comparison per vertex
 //! of N) is asked only where the layer depends on it.
 //!
@@ -118,10 +120,11 @@ impl Dir {
             (Ok(x), Ok(y))
                 if (x, y) != (0, 0) && x.unsigned_abs() <= LIMIT && y.unsigned_abs() <= LIMIT =>
             {
-                // Bit budget: s ≤ 2⁶³, numerator ≤ 2s ≤ 2⁶⁴, shifted ≤ 2¹²⁴ < 2¹²⁷.
+                // Bit budget: s ≤ 2⁶³, numerator ≤ 2s ≤ 2⁶⁴, shifted ≤ 2¹²⁴ < 2¹²⁷. The
+                // numerator is ≥ 0 (|x| ≤ s): divided unsigned, which is cheaper.
                 let s = x.unsigned_abs() as i128 + y.unsigned_abs() as i128;
                 let num = if upper { s - x as i128 } else { s + x as i128 };
-                let p = ((num << 60) / s) as u64; // ≤ 2⁶¹
+                let p = (((num as u128) << 60) / s as u128) as u64; // ≤ 2⁶¹
                 Dir {
                     key: (half | p) + 1,
                     x,
@@ -1748,10 +1751,13 @@ impl History {
     /// interval's cylinder (`run_id`).
     ///
     /// The derived intervals have distinct shapes (the chain crosses each arc once, so no
-    /// two runs share their end arc). When an event keeps their number, an interval with
-    /// the shape it had keeps its cylinder, and only the others are compared by shape (a
-    /// gone shape can only come back at another index). Gone and changed intervals are
-    /// walked in shape order, so cylinders close and open in shape order.
+    /// two runs share their end arc), so an interval with a shape it had before keeps its
+    /// cylinder, wherever it is matched. When an event keeps their number, intervals are
+    /// first matched at the same index; otherwise, since an event changes the chain only
+    /// in its middle ([`Splice`]), at the same place from either end of each [`sections`]
+    /// part (the two ends, the `(F, N)` runs, the `(N, G)` runs). Only the rest are sorted
+    /// and compared by shape. Gone and changed intervals are walked in shape order, so
+    /// cylinders close and open in shape order.
     fn reopen(&mut self, s: &mut Scratch, wall: Wall) -> Result<(), ComplexError> {
         s.gone.clear();
         s.shapes.clear();
@@ -1764,16 +1770,40 @@ impl History {
                 }
             }
         } else {
-            s.gone.extend(
-                s.last_derived
-                    .iter()
-                    .zip(&s.run_id)
-                    .map(|(l, &id)| (l.0, id)),
-            );
-            s.shapes
-                .extend(s.derived.iter().enumerate().map(|(k, d)| (d.0, k as u32)));
+            core::mem::swap(&mut s.run_id, &mut s.last_run_id);
             s.run_id.clear();
             s.run_id.resize(s.derived.len(), CylinderId::ZERO);
+            let n = Shape::object(Some(s.n));
+            let old = sections(&s.last_derived, n);
+            let new = sections(&s.derived, n);
+            for (o, d) in old.into_iter().zip(new) {
+                let (Some(old), Some(old_ids), Some(new), Some(ids)) = (
+                    s.last_derived.get(o.clone()),
+                    s.last_run_id.get(o),
+                    s.derived.get(d.clone()),
+                    s.run_id.get_mut(d.clone()),
+                ) else {
+                    continue;
+                };
+                let (mut ol, mut nl) = (old.len(), new.len());
+                let mut head = 0;
+                while head < ol.min(nl) && old[head].0 == new[head].0 {
+                    ids[head] = old_ids[head];
+                    head += 1;
+                }
+                while ol > head && nl > head && old[ol - 1].0 == new[nl - 1].0 {
+                    (ol, nl) = (ol - 1, nl - 1);
+                    ids[nl] = old_ids[ol];
+                }
+                // (Indices in range: `head ≤ ol ≤ old.len()`, `head ≤ nl ≤ new.len()`, and
+                // `ids`, `old_ids` are as long as `new`, `old`.)
+                for (l, &id) in old[head..ol].iter().zip(&old_ids[head..ol]) {
+                    s.gone.push((l.0, id));
+                }
+                for (k, x) in new[head..nl].iter().enumerate() {
+                    s.shapes.push((x.0, (d.start + head + k) as u32));
+                }
+            }
         }
         s.gone.sort_unstable_by_key(|e| e.0);
         s.shapes.sort_unstable_by_key(|e| e.0);
@@ -2025,19 +2055,25 @@ impl History {
                 *at += 1;
             }
         }
+        // Each group sorted and without repeats, moved down so that `grouped[..total]` is
+        // their concatenation; `count[k]` becomes the start of group `k` there.
         let mut total = 0usize;
         for k in 0..s.dense.len() {
-            let g = &mut s.grouped[s.count[k] as usize..s.count[k + 1] as usize];
-            g.sort_unstable();
+            let (a, b) = (s.count[k] as usize, s.count[k + 1] as usize);
+            s.grouped[a..b].sort_unstable();
+            s.count[k] = total as u32; // ≤ a: fits
             let mut last = None;
-            total += g
-                .iter()
-                .filter(|&&c| {
-                    let new = last != Some(c);
-                    last = Some(c);
-                    new
-                })
-                .count();
+            for i in a..b {
+                let c = s.grouped[i];
+                if last != Some(c) {
+                    s.grouped[total] = c; // total ≤ i
+                    total += 1;
+                }
+                last = Some(c);
+            }
+        }
+        if let Some(end) = s.count.last_mut() {
+            *end = total as u32;
         }
         let links = self.links.len() + total;
         if u32::try_from(links).is_err() {
@@ -2062,18 +2098,13 @@ impl History {
             self.cylinders[a.index()].right_neighbour = Some(b);
             self.cylinders[b.index()].left_neighbour = Some(a);
         }
+        let base = self.links.len();
+        self.links.extend_from_slice(&s.grouped[..total]);
         for k in 0..s.dense.len() {
             let d = s.dense[k].id;
-            let start = self.links.len();
-            let mut last = None;
-            for &c in &s.grouped[s.count[k] as usize..s.count[k + 1] as usize] {
-                if last != Some(c) {
-                    self.links.push(c);
-                }
-                last = Some(c);
-            }
+            let (a, b) = (s.count[k], s.count[k + 1]);
             // Fits: checked against u32 above.
-            self.kids[d.index()] = (start as u32, (self.links.len() - start) as u32);
+            self.kids[d.index()] = (base as u32 + a, b - a);
         }
         for k in 0..s.dense.len() {
             let d = s.dense[k].id;
@@ -2340,8 +2371,9 @@ struct Scratch {
     /// `(shape, cylinder)`.
     shapes: Vec<(Shape, u32)>,
     gone: Vec<(Shape, CylinderId)>,
-    /// The cylinder of each derived interval.
+    /// The cylinder of each derived interval, and of each in `last_derived`.
     run_id: Vec<CylinderId>,
+    last_run_id: Vec<CylinderId>,
     /// `chain_dense` of the chain after the current event.
     next_dense: Vec<usize>,
     /// New border-index entries at commit, (list, entry) in creation order, and grouped
@@ -2740,6 +2772,19 @@ fn derive(
             return;
         }
     }
+}
+
+/// The sections of the derived intervals ([`derive()`]): the two ends, the `(F, N)` runs
+/// (their ceiling is N: `n` as [`Shape::object`] packs it), the `(N, G)` runs.
+fn sections(derived: &[(Shape, usize, usize)], n: u128) -> [core::ops::Range<usize>; 3] {
+    let ends = derived.len().min(2);
+    let runs = derived
+        .get(ends..)
+        .unwrap_or(&[])
+        .iter()
+        .take_while(|d| (d.0 .0 >> 64) & 0xffff_ffff == n)
+        .count();
+    [0..ends, ends..ends + runs, ends + runs..derived.len()]
 }
 
 /// A chain cylinder's floor, ceiling and top arc as packed [`Shape`] fields, as
