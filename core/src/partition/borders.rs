@@ -953,6 +953,7 @@ pub(crate) fn zero_height(scene: &SceneRef<'_>, chain: Chain) -> Option<i64> {
 
 /// A cylinder's closed height range at θ = 0; unbounded (or corrupt) arcs give the
 /// extremes, so it is never too short.
+#[inline]
 fn zero_span(scene: &SceneRef<'_>, c: &Cylinder) -> (i64, i64) {
     (
         c.bottom
@@ -963,6 +964,7 @@ fn zero_span(scene: &SceneRef<'_>, c: &Cylinder) -> (i64, i64) {
 }
 
 /// The top of [`zero_span`] alone.
+#[inline]
 fn zero_top(scene: &SceneRef<'_>, c: &Cylinder) -> i64 {
     c.top
         .and_then(|t| zero_height(scene, t))

@@ -362,7 +362,8 @@ impl<S: Storage> Complex<S> {
     /// cylinder (the layer after it) when `q` lies strictly between its lowest and highest
     /// vertex, else its lower or upper chain bounds a stabbed cylinder at exactly `q`'s
     /// height. Of the stabbed cylinders only those whose floor reaches back to `q` and whose
-    /// ceiling reaches ahead of it (bounding boxes, exact integers) get the exact test.
+    /// ceiling reaches ahead of it (bounding boxes, exact integers) get the exact test, and
+    /// the start cylinder ends the search (see the comment there).
     fn trace_start_indexed(
         &self,
         scene: &SceneRef<'_>,
@@ -384,7 +385,8 @@ impl<S: Storage> Complex<S> {
                     .filter(|_| height(chain) == Some(qy))
                     .map(|ch| ch.object)
             };
-            let objects = [c.floor, on(c.bottom), on(c.top)].into_iter().flatten();
+            let (on_bottom, on_top) = (on(c.bottom), on(c.top));
+            let objects = [c.floor, on_bottom, on_top].into_iter().flatten();
             for o in objects.filter(|_| whole) {
                 if let Some(l) = point_in_object(scene, o, q) {
                     not_free = Some(l);
@@ -405,8 +407,21 @@ impl<S: Storage> Complex<S> {
                     .is_some()
             {
                 found = Some(id);
-                // Without the freeness test, the start cylinder ends the search.
-                return !whole;
+                // The start cylinder ends the search, the freeness test too unless one of
+                // its arcs lies at `q`'s height. An object containing `q` (or with `q` on
+                // its boundary) is crossed by the perturbed line through `q` — then it is
+                // this cylinder's floor (tested above) or ceiling, as every other layer of
+                // the line has floor and ceiling both behind `q` or both ahead — or only
+                // touches it, at its lowest or highest height, between this cylinder's
+                // floor and ceiling: then this cylinder's arc lies at that height.
+                if !whole {
+                    return true;
+                }
+                if on_bottom.is_some() || on_top.is_some() {
+                    return false;
+                }
+                not_free = c.ceiling.and_then(|g| point_in_object(scene, g, q));
+                return true;
             }
             false
         });
@@ -558,10 +573,9 @@ pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     full: bool,
     lap: u8,
     end: Option<(u8, KeyedAngle)>,
-    /// The tangent (vertex, ahead) of the last event, if it crossed a chain: its angle is θ
-    /// itself, never an exit (the new cylinder often has a chain of the same object, and
-    /// comparing an angle with itself costs the full perturbed predicate).
-    last: Option<(usize, bool)>,
+    /// The tangent vertex of the last event, if it crossed a chain: never an exit of the
+    /// cylinder entered, so its angle is not computed (see [`Walker::chain_exit_ccw`]).
+    last: Option<usize>,
     /// The tangents from `q` to recent chain objects: consecutive cylinders of a trace
     /// mostly share a chain, a walk comes back to the objects near the eye all around the
     /// circle, and the tangents depend only on the object.
@@ -747,19 +761,25 @@ impl<const K: usize> Walker<K> {
     ) -> Result<Option<Step>, WalkError> {
         let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
         let lap = self.lap;
-        // The right wall, or a crossing of the bottom or top chain.
-        let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
-            // The permanent wall ends a full-circle walk; a range walk crosses it.
-            Wall::Zero => self
-                .end
-                .map(|_| (lap.saturating_add(1), Angle::ZERO.keyed(), None)),
-            w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
-        };
-        // Unrolled by hand: the loop over the two chains cost a view 2 % more.
         let [bottom, top] = complex.borders_ref().arcs(self.cur);
-        self.chain_exit_ccw(scene, (c.bottom, bottom), Side::Below, &mut best);
-        self.chain_exit_ccw(scene, (c.top, top), Side::Above, &mut best);
-        let Some((l, angle, exit)) = best else {
+        let found = match self.exit_by_arcs(complex, scene, c, [bottom, top]) {
+            Some((angle, exit)) => Some((lap, angle, exit)),
+            None => {
+                // The right wall, or a crossing of the bottom or top chain.
+                let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
+                    // The permanent wall ends a full-circle walk; a range walk crosses it.
+                    Wall::Zero => self
+                        .end
+                        .map(|_| (lap.saturating_add(1), Angle::ZERO.keyed(), None)),
+                    w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
+                };
+                // Unrolled by hand: the loop over the two chains cost a view 2 % more.
+                self.chain_exit_ccw(scene, (c.bottom, bottom), Side::Below, &mut best);
+                self.chain_exit_ccw(scene, (c.top, top), Side::Above, &mut best);
+                best
+            }
+        };
+        let Some((l, angle, exit)) = found else {
             return match self.end {
                 None => Ok(None), // θ reached 2π
                 Some(_) => Err(WalkError::Corrupt),
@@ -775,10 +795,88 @@ impl<const K: usize> Walker<K> {
             Some(e) => self.cross(complex, scene, c, e, &angle)?,
         };
         self.theta = angle;
-        self.last = exit.map(|e| (e.vertex, e.ahead));
+        self.last = exit.map(|e| e.vertex);
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
+    }
+
+    /// [`Walker::next_ccw`]'s exit for the usual cylinder: its right wall is a vertex's and
+    /// each arc the walk can leave through is one vertex's sinusoid (`arcs`, see
+    /// [`Walker::candidate`]); `None` for any other, or where the exact order of two exits
+    /// is a tie (the perturbation decides there: the caller compares in full).
+    ///
+    /// Such a cylinder spans less than half a turn (an arc vertex is tangent over less than
+    /// half a turn), and each arc's crossing lies within half a turn after θ: the trace is
+    /// inside the cylinder just after θ, on the far side of the arc from where it leaves
+    /// (its offset minus the arc's is a sinusoid in θ with zeros half a turn apart). Angles
+    /// within one half turn are ordered by the sign of their exact cross product: one
+    /// product per arc, no half-planes, laps or comparison with θ.
+    #[inline(always)]
+    fn exit_by_arcs<S: Storage>(
+        &self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+        c: &Cylinder,
+        [bottom, top]: [u32; 2],
+    ) -> Option<(KeyedAngle, Option<ChainExit>)> {
+        let Wall::Vertex(v) = c.right else {
+            return None;
+        };
+        let mut best = *complex.borders_ref().angle(v.index())?;
+        let mut exit = None;
+        // Unrolled by hand, as in `next_ccw`.
+        self.arc_exit(
+            scene,
+            (c.bottom, bottom),
+            Side::Below,
+            (&mut best, &mut exit),
+        )?;
+        self.arc_exit(scene, (c.top, top), Side::Above, (&mut best, &mut exit))?;
+        Some((best.keyed(), exit))
+    }
+
+    /// The crossing of `chain` at its arc vertex `arc` into `(best, exit)` if it comes
+    /// before `best` (see [`Walker::exit_by_arcs`]); `None` where the arc has no vertex or
+    /// on an exact tie.
+    #[inline(always)]
+    fn arc_exit(
+        &self,
+        scene: &SceneRef<'_>,
+        (chain, arc): (Option<Chain>, u32),
+        side: Side,
+        (best, exit): (&mut Angle, &mut Option<ChainExit>),
+    ) -> Option<()> {
+        let Some(chain) = chain else {
+            return Some(());
+        };
+        if self.anchor == Anchor::Floor(chain.object) {
+            return Some(());
+        }
+        if arc == NO_ARC_VERTEX {
+            return None;
+        }
+        let h = arc as usize;
+        // The vertex just crossed is no exit (see `chain_exit_ccw`).
+        if self.last == Some(h) {
+            return Some(());
+        }
+        let ahead = exits_through(side, true);
+        let a = if ahead {
+            Angle::from_query(self.q, ranked(scene, h))
+        } else {
+            Angle::to_query(ranked(scene, h), self.q)
+        };
+        if before_within_half_turn(&a, best)? {
+            *best = a;
+            *exit = Some(ChainExit {
+                chain,
+                side,
+                vertex: h,
+                ahead,
+            });
+        }
+        Some(())
     }
 
     /// The crossing of `chain` (the cylinder's chain on `side`, with its arc vertex
@@ -806,7 +904,9 @@ impl<const K: usize> Walker<K> {
         let Some(h) = self.candidate(scene, chain, arc, ahead) else {
             return;
         };
-        if self.last == Some((h, ahead)) {
+        // The vertex just crossed: the line from the eye through it is the one at θ, or (an
+        // arc vertex, tangent over less than half a turn) its reverse at θ + π.
+        if self.last == Some(h) {
             return;
         }
         // `tangent_event` by hand: through the call a view costs 1 % more.
@@ -852,13 +952,16 @@ impl<const K: usize> Walker<K> {
         let Some(h) = self.candidate(scene, chain, arc, bound == chain.bound) else {
             return;
         };
+        // The vertex just crossed, as counter-clockwise (θ − π for an arc vertex's reverse).
+        if self.last == Some(h) {
+            return;
+        }
         let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
         // Against the best exit first, as counter-clockwise.
         if best
             .as_ref()
             .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
-            && (self.full
-                || (self.last != Some((h, ahead)) && a.cmp(&self.theta) == Ordering::Less))
+            && (self.full || a.cmp(&self.theta) == Ordering::Less)
         {
             let exit = ChainExit {
                 chain,
@@ -911,7 +1014,7 @@ impl<const K: usize> Walker<K> {
         self.full = angle.is_none();
         let at = angle.map_or(Angle::ZERO, |a| a.angle);
         self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
-        self.last = exit.map(|e| (e.vertex, e.ahead));
+        self.last = exit.map(|e| e.vertex);
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(at, exit, next)))
@@ -972,6 +1075,16 @@ impl<const K: usize> Walker<K> {
 #[inline(always)]
 fn exits_through(side: Side, ccw: bool) -> bool {
     (side == Side::Above) == ccw
+}
+
+/// Whether the direction `a` comes before `b` where both lie strictly within half a turn
+/// after one angle: then the exact cross product orders them; `None` where it is zero (the
+/// perturbation decides: the caller compares in full).
+#[inline(always)]
+fn before_within_half_turn(a: &Angle, b: &Angle) -> Option<bool> {
+    let ((ax, ay), (bx, by)) = (a.vector64()?, b.vector64()?);
+    let cross = i128::from(ax) * i128::from(by) - i128::from(ay) * i128::from(bx);
+    (cross != 0).then_some(cross > 0)
 }
 
 /// The chain on which the line from the eye through a tangent vertex of `chain`'s object
