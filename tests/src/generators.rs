@@ -1238,13 +1238,36 @@ pub fn check_walk(input: &WalkInput) -> Result<usize, String> {
     let sub = SubScene::new(s, ids);
     let c = build_by_sweep(&sub.as_ref()).map_err(|e| format!("build_by_sweep: {e}"))?;
     let whole = build_by_sweep(&s).map_err(|e| format!("build_by_sweep: {e}"))?;
+    let (sr, c_arcs) = (sub.as_ref(), c.clone().with_arc_vertices(&sub.as_ref()));
+    let whole_arcs = whole.clone().with_arc_vertices(&s);
     let mut free = 0;
     for v in &input.viewpoints {
         let Some(q) = v.point(&r, &s) else { continue };
         free += usize::from(compare_view(&s, &sub, &c, q).map_err(|e| format!("{v:?}: {e}"))?);
+        same_with_arc_vertices(view(&c, &sr, q), view(&c_arcs, &sr, q))
+            .map_err(|e| format!("{v:?} view: {e}"))?;
         compare_ray_tree(&s, &whole, q, 0).map_err(|e| format!("{v:?} depth 0: {e}"))?;
+        same_with_arc_vertices(
+            vcx::walk::ray_tree(&whole, &s, q, 0),
+            vcx::walk::ray_tree(&whole_arcs, &s, q, 0),
+        )
+        .map_err(|e| format!("{v:?} depth 0: {e}"))?;
     }
     Ok(free)
+}
+
+/// A walk in a complex with the opt-in arc-vertex index (`Complex::with_arc_vertices`)
+/// against the same walk without it: its shortcuts must not change a bit of the output
+/// (compared in full, exact angles included, through `Debug`).
+fn same_with_arc_vertices<T: Debug>(plain: T, indexed: T) -> Result<(), String> {
+    let (plain, indexed) = (format!("{plain:?}"), format!("{indexed:?}"));
+    if plain == indexed {
+        Ok(())
+    } else {
+        Err(format!(
+            "with arc vertices\n plain {plain}\n indexed {indexed}"
+        ))
+    }
 }
 
 /// Input of the `ray_tree` target.
@@ -1278,12 +1301,18 @@ pub fn check_ray_tree(input: &RayTreeInput) -> Result<usize, String> {
     let s = scene.as_ref();
     let c = build_by_sweep(&s).map_err(|e| format!("build_by_sweep: {e}"))?;
     let depth = usize::from(input.depth.clamp(1, 2));
+    let c_arcs = c.clone().with_arc_vertices(&s);
     let mut compared = 0;
     for v in &input.viewpoints {
         let Some(q) = v.point(&r, &s) else { continue };
         compared += usize::from(
             compare_ray_tree(&s, &c, q, depth).map_err(|e| format!("{v:?} depth {depth}: {e}"))?,
         );
+        same_with_arc_vertices(
+            vcx::walk::ray_tree(&c, &s, q, depth),
+            vcx::walk::ray_tree(&c_arcs, &s, q, depth),
+        )
+        .map_err(|e| format!("{v:?} depth {depth}: {e}"))?;
     }
     Ok(compared)
 }

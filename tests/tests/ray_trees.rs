@@ -524,3 +524,74 @@ fn ray_tree_ranges_are_restrictions_of_the_full_tree() {
         "{compared} {on_boundary}"
     );
 }
+
+/// The opt-in arc-vertex index (`Complex::with_arc_vertices`, which `vcx bench` and the demo
+/// walk with) changes no walk: views, ray trees to depth 5 and ray trees over a field of view
+/// equal those of the same complex without it, in full (exact angles included, through
+/// `Debug`), on halls, mixed scenes and grids, from random viewpoints and from points on
+/// lines through two vertices. The walks without it are judged by the reference above.
+#[test]
+fn arc_vertices_change_no_walk() {
+    use vcx::geom::predicates::Direction;
+    use vcx::walk::frame_tree;
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut compared = 0;
+    for (kind, n, seed) in [
+        (SceneKind::Hall, 5, 2),
+        (SceneKind::Hall, 8, 3),
+        (SceneKind::Mixed, 8, 1),
+        (SceneKind::Mixed, 12, 4),
+        (SceneKind::Grid, 64, 5),
+    ] {
+        let s = generate(kind, n, seed).unwrap().scene;
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let arcs = c.clone().with_arc_vertices(&s);
+        let v = s.vertices();
+        for k in 0..scale(200) {
+            let q = if k % 2 == 0 {
+                Some(random_point(&mut rng, &s))
+            } else {
+                // On the line through two vertices (edge extensions, bitangents).
+                let (a, b) = (v[rng.gen_range(0..v.len())], v[rng.gen_range(0..v.len())]);
+                let t = rng.gen_range(-2i64..=3);
+                QueryPoint::from_raw(
+                    (a.x() as i64 + t * (b.x() as i64 - a.x() as i64)) << 16,
+                    (a.y() as i64 + t * (b.y() as i64 - a.y() as i64)) << 16,
+                )
+            };
+            let Some(q) = q else { continue };
+            let same = |what: &str, plain: String, indexed: String| {
+                assert_eq!(plain, indexed, "{kind:?} {n}/{seed} q {q:?}: {what}");
+            };
+            same(
+                "view",
+                format!("{:?}", view(&c, &s, q)),
+                format!("{:?}", view(&arcs, &s, q)),
+            );
+            if view(&c, &s, q).is_err() {
+                continue;
+            }
+            compared += 1;
+            for depth in [0, 1, 3, 5] {
+                same(
+                    &format!("ray tree depth {depth}"),
+                    format!("{:?}", ray_tree(&c, &s, q, depth)),
+                    format!("{:?}", ray_tree(&arcs, &s, q, depth)),
+                );
+            }
+            let (from, to) = (
+                Direction::new(rng.gen_range(-9..=9), rng.gen_range(-9..=9)),
+                Direction::new(rng.gen_range(-9..=9), rng.gen_range(-9..=9)),
+            );
+            if let (Some(from), Some(to)) = (from, to) {
+                same(
+                    "frame tree depth 5",
+                    format!("{:?}", frame_tree(&c, &s, q, 5, from, to)),
+                    format!("{:?}", frame_tree(&arcs, &s, q, 5, from, to)),
+                );
+            }
+        }
+    }
+    assert!(compared > scale(200) * 3, "{compared}");
+}
