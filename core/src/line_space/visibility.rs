@@ -653,16 +653,12 @@ impl<'s, 'a> Kinetic<'s, 'a> {
         // stays; their top chains (t's, Q's, P's) are those of t, l and d, so on those
         // chains the top-chain index moves t to l, l to d and d to t.
         let slots = [l, d, t];
-        let mut chains = [ct.top, Some(cq), Some(cp)];
-        for k in 0..chains.len() {
-            let Some(chain) = chains.get_mut(k).and_then(Option::take) else {
-                continue;
-            };
+        let chains = [ct.top, Some(cq), Some(cp)];
+        for (k, &chain) in chains.iter().enumerate() {
+            let Some(chain) = chain else { continue };
             // Each chain once (two of them may coincide).
-            for other in chains.iter_mut().skip(k) {
-                if *other == Some(chain) {
-                    *other = None;
-                }
+            if chains.iter().take(k).any(|&c| c == Some(chain)) {
+                continue;
             }
             for s in self.by_top.get_mut(chain_index(chain))? {
                 *s = match *s {

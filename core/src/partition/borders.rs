@@ -319,7 +319,6 @@ impl SweepBorders {
             counts: mut offsets,
             places,
             start,
-            ..
         } = self;
         let mut sum = 0u32;
         for o in offsets.iter_mut() {
