@@ -133,6 +133,9 @@ pub struct Camera {
     tan_half: f64,
     forward: (f64, f64),
     right: (f64, f64),
+    /// Whether the columns are wide enough that the edges are strictly in order, as
+    /// directions and as image coordinates (see [`Camera::place`]).
+    ordered: bool,
 }
 
 impl Camera {
@@ -154,13 +157,15 @@ impl Camera {
             return Err(RenderError::Fov);
         }
         let (s, c) = (libm::sin(heading), libm::cos(heading));
+        let tan_half = libm::tan(fov / 2.0);
         let cam = Camera {
             eye,
             width,
             heading,
-            tan_half: libm::tan(fov / 2.0),
+            tan_half,
             forward: (c, s),
             right: (s, -c),
+            ordered: column_angle(tan_half, width) > ORDER_MARGIN,
         };
         // Edges must be distinct integer directions, in order.
         let (l, r) = (cam.edge(0), cam.edge(width));
@@ -268,6 +273,32 @@ impl Camera {
         a + (b - a) * (k as f64 + 0.5) / s.max(1) as f64
     }
 
+    /// Where [`merge`]'s column-by-column scan stops for a boundary at or right of edge
+    /// `first` (`at`, with `first < width`): the first column `c ≥ first` whose right edge
+    /// the boundary is strictly left of, or the last column; with its edges. For a camera
+    /// whose edges are in order (`ordered`): `c` starts at the column `guess` (from the
+    /// boundary's image coordinate), then is confirmed exactly against its two edges,
+    /// moving to a neighbour while it is not (the boundary's side of the edges changes
+    /// once, so the moves go one way).
+    fn place(&self, bound: &Bound, guess: usize, first: usize, at: Edge) -> (usize, Edge, Edge) {
+        let w = self.width;
+        let mut c = guess.max(first).min(w.saturating_sub(1));
+        let edge = |c: usize| if c == first { at } else { self.edge(c) };
+        let (mut a, mut b) = (edge(c), self.edge(c + 1));
+        for _ in 0..w {
+            if c > first && bound.side(&a) == Ordering::Greater {
+                c -= 1;
+                (a, b) = (edge(c), a);
+            } else if c + 1 < w && bound.side(&b) != Ordering::Greater {
+                c += 1;
+                (a, b) = (b, self.edge(c + 1));
+            } else {
+                break;
+            }
+        }
+        (c, a, b)
+    }
+
     /// The start of `iv` if it lies strictly inside the field of view whose outer edges
     /// are `left` and `right` (the camera's edges 0 and `width`): decided exactly for an
     /// exact start, by its `f64` image coordinate otherwise.
@@ -296,6 +327,23 @@ impl Camera {
         }
     }
 }
+
+/// `sin(fov) / width`, with `fov = 2·atan(tan_half)`: the smallest angle between two
+/// nominal column edges, less `O(2⁻²⁰)` relative for the rounding of their coordinates
+/// (the edge at `x` makes the angle `atan(x)` with the heading; `atan` has its smallest
+/// slope `1 / (1 + tan_half²)` at the outer edges).
+fn column_angle(tan_half: f64, width: usize) -> f64 {
+    2.0 * tan_half / (1.0 + tan_half * tan_half) / width as f64
+}
+
+/// A camera whose [`column_angle`] exceeds this has its edges strictly in order. An edge
+/// vector is within `2⁻⁴⁸` radians of its nominal direction (the `f64` direction
+/// `f + x·r` is within `2⁻⁵⁰`, since `f ⊥ r` and `|f| = |r|` exactly; scaling and
+/// rounding to integers of magnitude 2⁵⁰ add below `2⁻⁵⁰`), and its image coordinate within
+/// `(1 + x²)·2⁻⁴⁷` of `x`: both orders hold once the columns are wider than `2⁻⁴⁶`
+/// radians. `2⁻⁴⁰` leaves room for the rounding of [`column_angle`] itself; only
+/// cameras of absurdly narrow columns (`sin(fov) < width·2⁻⁴⁰`) fall below it.
+const ORDER_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// A boundary strictly inside the field of view: its exact direction, or its image
 /// coordinate when it is known in `f64` only.
@@ -484,12 +532,81 @@ pub struct Piece {
 /// column by column from the left, each column's pieces from left to right. Allocates
 /// nothing; O(W + boundaries in view + log intervals): columns and boundaries are merged
 /// left to right, each column edge computed once. An empty `intervals` emits nothing.
-pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl FnMut(Piece)) {
+pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], emit: impl FnMut(Piece)) {
+    merge(camera, intervals, &mut Pieces(emit));
+}
+
+/// What the merge of columns and boundaries ([`merge`]) reports to.
+trait Cover {
+    /// Whether whole columns are wanted as pieces (with their edges' image coordinates):
+    /// then every column edge is computed; otherwise runs of whole columns come to
+    /// [`Cover::whole`] and only the edges next to boundaries are computed.
+    const PIECES: bool;
+    /// A piece of positive width (in column order, each column's from the left).
+    fn piece(&mut self, p: Piece);
+    /// Columns `cols` lie wholly in `interval` (never when [`Cover::PIECES`]).
+    fn whole(&mut self, cols: core::ops::Range<usize>, interval: usize);
+}
+
+/// [`coverage`]'s pieces, every column as pieces.
+struct Pieces<F>(F);
+
+impl<F: FnMut(Piece)> Cover for Pieces<F> {
+    const PIECES: bool = true;
+    fn piece(&mut self, p: Piece) {
+        (self.0)(p);
+    }
+    fn whole(&mut self, _: core::ops::Range<usize>, _: usize) {}
+}
+
+/// Reports the part of column `col` (edges at image coordinates `a`, `b`) from `from` to
+/// `to` seen in `interval`, if it has positive width.
+fn piece(
+    out: &mut impl Cover,
+    col: usize,
+    interval: usize,
+    (a, b): (f64, f64),
+    from: f64,
+    to: f64,
+) {
+    // The rest of a column from its left edge: the whole column, fraction exactly 1
+    // (what the clamps and the division below give, without them).
+    if to == f64::INFINITY && from.to_bits() == a.to_bits() {
+        if b > a {
+            out.piece(Piece {
+                column: col,
+                interval,
+                from,
+                to: b,
+                fraction: 1.0,
+            });
+        }
+        return;
+    }
+    let (from, to) = (clamp(from, a, b), clamp(to, a, b));
+    if to > from {
+        out.piece(Piece {
+            column: col,
+            interval,
+            from,
+            to,
+            fraction: (to - from) / (b - a),
+        });
+    }
+}
+
+/// [`coverage`] into `out`: columns and boundaries merged left to right. Without
+/// [`Cover::PIECES`], in a camera whose edges are in order, a boundary beyond the current
+/// column is placed by [`Camera::place`] and the whole columns before it are one run.
+fn merge<I: Interval, O: Cover>(camera: &Camera, intervals: &[I], out: &mut O) {
     let n = intervals.len();
     let w = camera.width;
     if n == 0 {
         return;
     }
+    let jump = !O::PIECES && camera.ordered;
+    // Columns per unit of image coordinate, for the guesses of `Camera::place`.
+    let per_x = w as f64 / (2.0 * camera.tan_half);
     let left = camera.edge(0);
     let la = left.angle();
     // The interval just clockwise of the left edge.
@@ -507,32 +624,6 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
     let mut col = 0;
     let (mut a, mut b) = (left, camera.edge(1));
     let mut x = left.x;
-    let mut piece = |col: usize, interval: usize, (a, b): (f64, f64), from: f64, to: f64| {
-        // The rest of a column from its left edge: the whole column, fraction exactly 1
-        // (what the clamps and the division below give, without them).
-        if to == f64::INFINITY && from.to_bits() == a.to_bits() {
-            if b > a {
-                emit(Piece {
-                    column: col,
-                    interval,
-                    from,
-                    to: b,
-                    fraction: 1.0,
-                });
-            }
-            return;
-        }
-        let (from, to) = (clamp(from, a, b), clamp(to, a, b));
-        if to > from {
-            emit(Piece {
-                column: col,
-                interval,
-                from,
-                to,
-                fraction: (to - from) / (b - a),
-            });
-        }
-    };
     // Boundaries clockwise from the left edge: the start of the current interval, then of
     // the one before, … until one lies outside the field of view. Boundaries and columns
     // are merged left to right: O(W + boundaries in view).
@@ -544,25 +635,47 @@ pub fn coverage<I: Interval>(camera: &Camera, intervals: &[I], mut emit: impl Fn
             };
             // Columns whose right edge is at or left of the boundary end before it (a
             // boundary exactly on an inner edge makes no piece).
-            while col + 1 < w && bound.side(&b) != Ordering::Greater {
-                piece(col, cur, (a.x, b.x), x, f64::INFINITY);
-                col += 1;
-                a = b;
-                b = camera.edge(col + 1);
-                x = a.x;
+            if jump {
+                if col + 1 < w && bound.side(&b) != Ordering::Greater {
+                    piece(out, col, cur, (a.x, b.x), x, f64::INFINITY);
+                    let next;
+                    // The column of `bx` (`as` saturates, and takes NaN to 0).
+                    let guess = ((bound.x(camera) + camera.tan_half) * per_x) as usize;
+                    (next, a, b) = camera.place(&bound, guess, col + 1, b);
+                    if next > col + 1 {
+                        out.whole(col + 1..next, cur);
+                    }
+                    col = next;
+                    x = a.x;
+                }
+            } else {
+                while col + 1 < w && bound.side(&b) != Ordering::Greater {
+                    piece(out, col, cur, (a.x, b.x), x, f64::INFINITY);
+                    col += 1;
+                    a = b;
+                    b = camera.edge(col + 1);
+                    x = a.x;
+                }
             }
             // A boundary at or left of the column's left edge is already passed (an `f64`
             // boundary out of order next to an exact one, or one exactly on the edge).
             if bound.side(&a) == Ordering::Less {
                 let bx = bound.x(camera).max(x);
-                piece(col, cur, (a.x, b.x), x, bx);
+                piece(out, col, cur, (a.x, b.x), x, bx);
                 x = bx;
             }
             cur = (cur + n - 1) % n;
         }
     }
+    if jump {
+        piece(out, col, cur, (a.x, b.x), x, f64::INFINITY);
+        if col + 1 < w {
+            out.whole(col + 1..w, cur);
+        }
+        return;
+    }
     while col < w {
-        piece(col, cur, (a.x, b.x), x, f64::INFINITY);
+        piece(out, col, cur, (a.x, b.x), x, f64::INFINITY);
         col += 1;
         a = b;
         b = camera.edge(col + 1);
@@ -714,11 +827,7 @@ impl CoverageTable {
             e.1 += fraction;
             return;
         }
-        let mut b = Branch::new();
-        for &o in branch.iter().take(MAX_BRANCH) {
-            let _ = b.push(o);
-        }
-        self.entries.push((b, fraction));
+        self.entries.push((kept(branch), fraction));
     }
 
     /// Ends the current column.
@@ -729,20 +838,24 @@ impl CoverageTable {
     /// The exact coverage of the camera's columns by the intervals.
     pub fn exact<I: Interval>(camera: &Camera, intervals: &[I]) -> CoverageTable {
         let mut t = CoverageTable::new();
-        let mut col = 0;
-        coverage(camera, intervals, |p| {
-            while col < p.column {
-                t.end_column();
-                col += 1;
-            }
-            let branch = intervals.get(p.interval).map_or(&[][..], |i| i.branch());
-            t.push(branch, p.fraction);
-        });
-        while col < camera.width {
-            t.end_column();
-            col += 1;
-        }
+        t.exact_into(camera, intervals);
         t
+    }
+
+    /// [`CoverageTable::exact`] into `self` (cleared first), reusing its buffers. Runs of
+    /// whole columns take no column edges ([`merge`]), and a column's first piece no
+    /// search among the column's branches.
+    pub fn exact_into<I: Interval>(&mut self, camera: &Camera, intervals: &[I]) {
+        self.clear();
+        self.start.reserve(camera.width);
+        self.entries.reserve(camera.width);
+        let mut fill = Fill {
+            table: self,
+            intervals,
+            col: 0,
+        };
+        merge(camera, intervals, &mut fill);
+        fill.end_columns(camera.width);
     }
 
     /// Number of columns.
@@ -802,6 +915,64 @@ impl CoverageTable {
             }
         }
         (sum / n as f64, wrong as f64 / n as f64)
+    }
+}
+
+/// `branch` as kept in a table: its first [`MAX_BRANCH`] objects.
+#[cfg(feature = "alloc")]
+fn kept(branch: &[ObjectId]) -> Branch {
+    Branch::from_slice(branch.get(..MAX_BRANCH).unwrap_or(branch)).unwrap_or_default()
+}
+
+/// [`CoverageTable::exact_into`]'s filling of the table from [`merge`].
+#[cfg(feature = "alloc")]
+struct Fill<'a, I> {
+    table: &'a mut CoverageTable,
+    intervals: &'a [I],
+    /// The column being filled.
+    col: usize,
+}
+
+#[cfg(feature = "alloc")]
+impl<I: Interval> Fill<'_, I> {
+    /// Ends the columns before `col`.
+    fn end_columns(&mut self, col: usize) {
+        while self.col < col {
+            self.table.end_column();
+            self.col += 1;
+        }
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl<I: Interval> Cover for Fill<'_, I> {
+    const PIECES: bool = false;
+
+    fn piece(&mut self, p: Piece) {
+        self.end_columns(p.column);
+        let branch = self
+            .intervals
+            .get(p.interval)
+            .map_or(&[][..], |i| i.branch());
+        let t = &mut *self.table;
+        // A column's first piece has no entry to add to.
+        if t.start.last() == Some(&t.entries.len()) {
+            t.entries.push((kept(branch), p.fraction));
+        } else {
+            t.push(branch, p.fraction);
+        }
+    }
+
+    fn whole(&mut self, cols: core::ops::Range<usize>, interval: usize) {
+        self.end_columns(cols.start);
+        let branch = self.intervals.get(interval).map_or(&[][..], |i| i.branch());
+        let entry = (kept(branch), 1.0);
+        let t = &mut *self.table;
+        // One entry per column, each the column's only one: written in place.
+        let first = t.entries.len();
+        t.entries.resize(first + cols.len(), entry);
+        t.start.extend(first + 1..=first + cols.len());
+        self.col = cols.end;
     }
 }
 
@@ -1567,6 +1738,116 @@ fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::round_small_i64;
+    #[cfg(feature = "alloc")]
+    use super::{coverage, Angle, Camera, CoverageTable, Direction, Interval, ObjectId};
+    #[cfg(feature = "alloc")]
+    use alloc::vec::Vec;
+
+    /// An interval with an exact start or one known in `f64` only.
+    #[cfg(feature = "alloc")]
+    struct Iv {
+        exact: Option<Angle>,
+        start: f64,
+        branch: Vec<ObjectId>,
+    }
+
+    #[cfg(feature = "alloc")]
+    impl Interval for Iv {
+        fn exact_start(&self) -> Option<Angle> {
+            self.exact
+        }
+        fn start_radians(&self) -> f64 {
+            self.start
+        }
+        fn branch(&self) -> &[ObjectId] {
+            &self.branch
+        }
+    }
+
+    /// The table from every piece of [`coverage`], each through `push`: the column by
+    /// column merge, every column edge computed.
+    #[cfg(feature = "alloc")]
+    fn by_pieces(camera: &Camera, intervals: &[Iv]) -> CoverageTable {
+        let mut t = CoverageTable::new();
+        let mut col = 0;
+        coverage(camera, intervals, |p| {
+            while col < p.column {
+                t.end_column();
+                col += 1;
+            }
+            t.push(&intervals[p.interval].branch, p.fraction);
+        });
+        while col < camera.width() {
+            t.end_column();
+            col += 1;
+        }
+        t
+    }
+
+    /// `CoverageTable::exact` (runs of whole columns without their edges, boundaries
+    /// placed by their image coordinate) equals the table of `coverage`'s pieces, bit for
+    /// bit: boundaries anywhere, exactly on column edges, known in `f64` only, on cameras
+    /// of every width and field of view, and on one whose edges are not known in order.
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn exact_table_equals_the_pieces() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let eye = crate::QueryPoint::from_raw(0, 0).unwrap();
+        let branches: [&[u32]; 4] = [&[], &[1], &[2, 1], &[3]];
+        let mut reused = CoverageTable::new();
+        let mut jumps = 0;
+        for case in 0..3000 {
+            let unit = |r: u64| (r % 1_000_000) as f64 / 1_000_000.0;
+            let heading = unit(next()) * core::f64::consts::TAU;
+            let (fov, width) = match case % 8 {
+                7 => (2e-10, 4096),
+                k => (
+                    [1e-3, 0.3, 1.5, 2.5, 3.12][k % 5],
+                    [1, 2, 3, 7, 64, 800, 801][(next() % 7) as usize],
+                ),
+            };
+            let camera = Camera::new(eye, heading, fov, width).unwrap();
+            jumps += usize::from(camera.ordered);
+            let mut ivs = Vec::new();
+            for _ in 0..1 + next() % 12 {
+                let t = camera.tan_half();
+                let x = (unit(next()) * 2.4 - 1.2) * t;
+                let v = match next() % 4 {
+                    // Exactly on a column edge.
+                    0 => camera.edge((next() as usize) % (width + 1)).vector,
+                    // Anywhere on the circle.
+                    1 => ((next() % 2001) as i64 - 1000, (next() % 2001) as i64 - 1000),
+                    _ => {
+                        let d = camera.direction_at(x);
+                        ((d.0 * 1e12) as i64, (d.1 * 1e12) as i64)
+                    }
+                };
+                let Some(d) = Direction::new(v.0, v.1) else {
+                    continue;
+                };
+                let a = Angle::constant(d);
+                let exact = (next() % 3 != 0).then_some(a);
+                let branch = branches[(next() % 4) as usize];
+                ivs.push(Iv {
+                    exact,
+                    start: a.radians(),
+                    branch: branch.iter().map(|&o| ObjectId(o)).collect(),
+                });
+            }
+            ivs.sort_by(|a, b| a.start.total_cmp(&b.start));
+            let want = by_pieces(&camera, &ivs);
+            assert_eq!(CoverageTable::exact(&camera, &ivs), want, "case {case}");
+            reused.exact_into(&camera, &ivs);
+            assert_eq!(reused, want, "case {case}, reused");
+        }
+        assert!(jumps > 2000, "{jumps}");
+    }
 
     /// The magic-number rounding agrees with `libm::round` away from ties, rounds ties to
     /// even, and is exact up to the largest edge component 2⁵⁰ (and beyond, to 2⁵¹).

@@ -8,8 +8,9 @@
 //! beforehand:
 //! * **complex**: the ray tree to depth D over the frame's field of view
 //!   ([`vcx::walk::frame_tree`], over the complex of the whole scene) and its exact
-//!   per-column coverage ([`CoverageTable::exact`]) — the truth,
-//!   error 0 by construction (checked against the exact reference in `tests/tests/render.rs`);
+//!   per-column coverage ([`CoverageTable::exact_into`], one table reused from frame to
+//!   frame as the casters reuse theirs) — the truth, error 0 by construction (checked
+//!   against the exact reference in `tests/tests/render.rs`);
 //! * **quadtree** and **bvh** (`vcx-baselines`): `s` stratified rays per column for each
 //!   `s` of `--samples`, traced through the same optics.
 //!
@@ -408,20 +409,24 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
                 .map_err(|e| Failure::bad_input(format!("--fov/--width: {e}")))?,
         );
     }
-    // The complex: ray tree + exact coverage per frame.
+    // The complex: ray tree + exact coverage per frame, into one table reused from frame
+    // to frame as the casters reuse theirs.
     let (mut times, mut exact, mut intervals) = (Vec::new(), Vec::new(), 0usize);
     let (mut tree_times, mut cover_times) = (Vec::new(), Vec::new());
     let mut used = Vec::new();
+    let mut table = CoverageTable::new();
     for cam in &cameras {
         let (from, to) = cam.range();
         let r = timed(&mut times, a.repeat, || {
             frame_tree(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut tree| {
                 angle_order(&mut tree);
-                (CoverageTable::exact(cam, &tree), tree.len())
+                table.exact_into(cam, &tree);
+                tree.len()
             })
         });
         // A viewpoint the walk rejects (degenerate rounded optics) is left out.
-        if let Ok((table, n)) = r {
+        if let Ok(n) = r {
+            exact.push(table.clone());
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
             if let Ok(tree) = timed(&mut tree_times, a.repeat, || {
@@ -430,11 +435,8 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
                     t
                 })
             }) {
-                timed(&mut cover_times, a.repeat, || {
-                    CoverageTable::exact(cam, &tree)
-                });
+                timed(&mut cover_times, a.repeat, || table.exact_into(cam, &tree));
             }
-            exact.push(table);
             intervals += n;
             used.push(*cam);
         }
