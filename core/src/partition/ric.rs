@@ -1403,7 +1403,7 @@ impl History {
             let i = s.state_index(s.chain[k]);
             s.chain_dense.push(i);
         }
-        s.record_children();
+        s.record_children(0);
         let mut theta: Option<Key> = None;
 
         for _ in 0..4 * self.cylinders.len() + 16 {
@@ -1521,7 +1521,8 @@ impl History {
         out: &mut Vec<CylinderId>,
     ) -> Option<Splice> {
         let n = s.n;
-        // The index of a cylinder in the current chain, if it may start the spliced tail.
+        // The index of a cylinder in the current chain, if it may start the spliced tail
+        // (checked against the chain: the position of a cylinder that left it is stale).
         let tail = |c: CylinderId| {
             s.position(c)
                 .filter(|&p| p >= restart.tail_from && s.chain.get(p) == Some(&c))
@@ -1953,7 +1954,7 @@ impl History {
         }
         core::mem::swap(&mut s.chain, &mut s.next);
         core::mem::swap(&mut s.chain_dense, &mut s.next_dense);
-        s.record_children();
+        s.record_children(keep);
         Ok(())
     }
 
@@ -2343,9 +2344,9 @@ struct Old {
     /// that can cover one chain cylinder (below or above N, and an `(F, N)` and an
     /// `(N, G)` run). [`CylinderId::ZERO`], the root, is never a child: it stands for none.
     recent: [CylinderId; 4],
-    /// Index in the current chain (valid when `generation` is the scratch's).
+    /// Index in the current chain while a member (stale after it leaves: checked against
+    /// the chain).
     pos: u32,
-    generation: u32,
 }
 
 /// The state of one insertion, kept between insertions to reuse its allocations.
@@ -2403,8 +2404,6 @@ struct Scratch {
     dense: Vec<Old>,
     sparse: Vec<u32>,
     stamp: u32,
-    /// Counts chain updates (for [`Old::pos`]).
-    generation: u32,
     /// Per object: the insertion number and the bounds in `pool` of its bitangents with N,
     /// grouped by the pair of chains they join ([`fit_index`]): group `g` is
     /// `pool[bounds[g] .. bounds[g + 1]]`, in the order [`bitangents`] gives them.
@@ -2472,11 +2471,10 @@ impl Scratch {
             .filter(|&&k| self.dense.get(k as usize).is_some_and(|o| o.id == id))
     }
 
-    /// The index of `id` in the current chain.
+    /// The index of `id` in the current chain if a member; else any index (check it
+    /// against the chain: [`Old::pos`]).
     fn position(&self, id: CylinderId) -> Option<usize> {
-        self.get(id)
-            .filter(|o| o.generation == self.generation)
-            .map(|o| o.pos as usize)
+        self.get(id).map(|o| o.pos as usize)
     }
 
     fn get(&self, id: CylinderId) -> Option<&Old> {
@@ -2504,7 +2502,6 @@ impl Scratch {
                     last_piece: None,
                     recent: [CylinderId::ZERO; 4],
                     pos: 0,
-                    generation: 0,
                 });
                 k
             }
@@ -2559,17 +2556,13 @@ impl Scratch {
     /// the interval below N, `I_k` to the one above, and every `I_j` to the `(F, N)` and
     /// `(N, G)` runs through `j` (as [`derive`] reports them, their cylinders in
     /// `run_id`). `chain_dense` must hold the chain's indices in `dense`.
-    fn record_children(&mut self) {
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.dense.iter_mut().for_each(|d| d.generation = 0);
-            self.generation = 1;
-        }
-        let generation = self.generation;
-        for (k, &i) in self.chain_dense.iter().enumerate() {
+    ///
+    /// Positions ([`Old::pos`]) are set from chain index `from` on: below it the chain is
+    /// the one before the event ([`Splice::keep`]).
+    fn record_children(&mut self, from: usize) {
+        for (k, &i) in self.chain_dense.iter().enumerate().skip(from) {
             if let Some(st) = self.dense.get_mut(i) {
                 st.pos = k as u32;
-                st.generation = generation;
             }
         }
         for (&(_, lo, hi), &id) in self.derived.iter().zip(&self.run_id) {
@@ -2948,6 +2941,32 @@ mod tests {
         assert_eq!(h.stats(), free.stats());
         assert!(h.estimated_bytes() <= large.bytes);
         assert_eq!(h.live_cylinders(), h.complex(&s).unwrap().cylinders().len());
+    }
+
+    /// After an event only the chain from [`Splice::keep`] up has moved: positions set
+    /// from there keep every member's position its index. (A stale one would only lose a
+    /// splice — a longer climb to the same chain — which no output shows.)
+    #[test]
+    fn chain_positions_follow_the_splice() {
+        let mut s = Scratch::default();
+        s.begin(ObjectId(0), 16, 1);
+        let mut set = |chain: &[u32], keep: usize| {
+            s.chain = chain.iter().map(|&k| CylinderId(k)).collect();
+            s.chain_dense.clear();
+            for k in 0..s.chain.len() {
+                let i = s.state_index(s.chain[k]);
+                s.chain_dense.push(i);
+            }
+            s.record_children(keep);
+            for (k, &c) in s.chain.iter().enumerate() {
+                assert_eq!(s.position(c), Some(k), "{chain:?} from {keep}");
+            }
+        };
+        set(&[1, 2, 3, 4], 0);
+        set(&[1, 2, 5, 6, 3, 4], 2); // the tail moves up
+        set(&[1, 2, 7, 4], 2); // down
+        set(&[1, 2, 8, 4], 2); // stays
+        set(&[9, 2, 8, 4], 0);
     }
 
     #[test]
