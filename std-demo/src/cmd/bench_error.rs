@@ -6,11 +6,13 @@
 //! of the scene's size, the heading turning 360°/F per frame), every frame of `W` columns is
 //! rendered three ways, all in the same run, complexes and acceleration structures built
 //! beforehand:
-//! * **complex**: the ray tree to depth D over the frame's field of view
-//!   ([`vcx::walk::frame_tree`], over the complex of the whole scene) and its exact
-//!   per-column coverage ([`CoverageTable::exact_into`], one table reused from frame to
-//!   frame as the casters reuse theirs) — the truth, error 0 by construction (checked
-//!   against the exact reference in `tests/tests/render.rs`);
+//! * **complex**: the ray tree to depth D over the frame's field of view, walked in lock
+//!   step without allocating as a device does ([`vcx::walk::frame_tree_into`], over the
+//!   complex of the whole scene, into a reused scratch and buffer of
+//!   [`vcx::render::FrameInterval`]s), and its exact per-column coverage
+//!   ([`CoverageTable::exact_into`], one table reused from frame to frame as the casters
+//!   reuse theirs) — the truth, error 0 by construction (checked against the exact
+//!   reference in `tests/tests/render.rs`);
 //! * **quadtree** and **bvh** (`vcx-baselines`): `s` stratified rays per column for each
 //!   `s` of `--samples`, traced through the same optics.
 //!
@@ -34,9 +36,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::{json, Value};
+use vcx::partition::Complex;
 use vcx::partition::{build_by_sweep, point_in_scene};
-use vcx::render::{angle_order, Camera, CoverageTable};
-use vcx::walk::frame_tree;
+use vcx::render::{angle_order, Camera, CoverageTable, FrameInterval};
+use vcx::walk::{frame_tree_into, TreeScratch, WalkError};
 use vcx::{QueryPoint, SceneRef};
 use vcx_baselines::{render, render_columns, BvhCaster, Caster, Prepared, Quadtree};
 
@@ -391,6 +394,31 @@ pub(crate) struct Measured {
     pub bvh: Vec<Point>,
 }
 
+/// The ray tree over `cam`'s field of view into `kept`, in start-angle order.
+fn frame(
+    complex: &Complex,
+    scene: &SceneRef<'_>,
+    cam: &Camera,
+    depth: usize,
+    scratch: &mut TreeScratch<64>,
+    kept: &mut Vec<FrameInterval>,
+) -> Result<(), WalkError> {
+    let (from, to) = cam.range();
+    kept.clear();
+    let mut fits = true;
+    frame_tree_into(complex, scene, cam.eye(), depth, from, to, scratch, |i| {
+        match FrameInterval::new(&i) {
+            Some(f) => kept.push(f),
+            None => fits = false,
+        }
+    })?;
+    if !fits {
+        return Err(WalkError::TreeTooDeep);
+    }
+    angle_order(kept);
+    Ok(())
+}
+
 /// Measures the complex and both casters on `scene` (the module documentation).
 pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Failure> {
     a.check()?;
@@ -409,34 +437,29 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
                 .map_err(|e| Failure::bad_input(format!("--fov/--width: {e}")))?,
         );
     }
-    // The complex: ray tree + exact coverage per frame, into one table reused from frame
-    // to frame as the casters reuse theirs.
+    // The complex: ray tree + exact coverage per frame; the walk's scratch, its intervals
+    // and the table are reused from frame to frame, as the casters reuse theirs.
     let (mut times, mut exact, mut intervals) = (Vec::new(), Vec::new(), 0usize);
     let (mut tree_times, mut cover_times) = (Vec::new(), Vec::new());
     let mut used = Vec::new();
+    let (mut scratch, mut kept) = (Box::new(TreeScratch::<64>::new()), Vec::new());
     let mut table = CoverageTable::new();
     for cam in &cameras {
-        let (from, to) = cam.range();
         let r = timed(&mut times, a.repeat, || {
-            frame_tree(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut tree| {
-                angle_order(&mut tree);
-                table.exact_into(cam, &tree);
-                tree.len()
-            })
+            frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)?;
+            table.exact_into(cam, &kept);
+            Ok::<_, WalkError>(kept.len())
         });
         // A viewpoint the walk rejects (degenerate rounded optics) is left out.
         if let Ok(n) = r {
             exact.push(table.clone());
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
-            if let Ok(tree) = timed(&mut tree_times, a.repeat, || {
-                frame_tree(&complex, &scene, cam.eye(), a.depth, from, to).map(|mut t| {
-                    angle_order(&mut t);
-                    t
-                })
-            }) {
-                timed(&mut cover_times, a.repeat, || table.exact_into(cam, &tree));
-            }
+            timed(&mut tree_times, a.repeat, || {
+                frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)
+            })
+            .map_err(internal)?;
+            timed(&mut cover_times, a.repeat, || table.exact_into(cam, &kept));
             intervals += n;
             used.push(*cam);
         }
