@@ -791,37 +791,45 @@ impl<'a, I: Interval> Centres<'a, I> {
 /// Per-column coverage by **branch** (pieces of equal branch merged), the common output
 /// of the complex and of the ray casters of `vcx-baselines`.
 #[cfg(feature = "alloc")]
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct CoverageTable {
-    /// `entries[start[c]..start[c + 1]]` are column `c`'s branches with their fractions.
-    pub start: Vec<usize>,
+    /// `entries[a..b]` are column `c`'s branches with their fractions, for
+    /// `(a, b) = spans[c]`: a run of whole columns shares one entry, written once.
+    spans: Vec<(usize, usize)>,
     /// Branches and covered fractions, grouped by column.
-    pub entries: Vec<(Branch, f64)>,
+    entries: Vec<(Branch, f64)>,
+    /// Where the current (open) column's entries begin.
+    open: usize,
+}
+
+/// Tables are equal when their columns are: where entries are shared does not matter.
+#[cfg(feature = "alloc")]
+impl PartialEq for CoverageTable {
+    fn eq(&self, other: &CoverageTable) -> bool {
+        self.columns() == other.columns()
+            && (0..self.columns()).all(|c| self.column(c) == other.column(c))
+    }
 }
 
 #[cfg(feature = "alloc")]
 impl CoverageTable {
     /// An empty table; fill it with [`CoverageTable::push`] and [`CoverageTable::end_column`].
     pub fn new() -> CoverageTable {
-        CoverageTable {
-            start: alloc::vec![0],
-            entries: Vec::new(),
-        }
+        CoverageTable::default()
     }
 
     /// Clears the table, keeping its buffers.
     pub fn clear(&mut self) {
-        self.start.clear();
-        self.start.push(0);
+        self.spans.clear();
         self.entries.clear();
+        self.open = 0;
     }
 
     /// Adds `fraction` of the current column to `branch`.
     pub fn push(&mut self, branch: &[ObjectId], fraction: f64) {
-        let s = self.start.last().copied().unwrap_or(0);
         if let Some(e) = self
             .entries
-            .get_mut(s..)
+            .get_mut(self.open..)
             .and_then(|col| col.iter_mut().find(|e| e.0.as_slice() == branch))
         {
             e.1 += fraction;
@@ -830,9 +838,12 @@ impl CoverageTable {
         self.entries.push((kept(branch), fraction));
     }
 
-    /// Ends the current column.
+    /// Ends the current column (inlined: the casters end every column through it).
+    #[inline]
     pub fn end_column(&mut self) {
-        self.start.push(self.entries.len());
+        let end = self.entries.len();
+        self.spans.push((self.open, end));
+        self.open = end;
     }
 
     /// The exact coverage of the camera's columns by the intervals.
@@ -847,8 +858,7 @@ impl CoverageTable {
     /// search among the column's branches.
     pub fn exact_into<I: Interval>(&mut self, camera: &Camera, intervals: &[I]) {
         self.clear();
-        self.start.reserve(camera.width);
-        self.entries.reserve(camera.width);
+        self.spans.reserve(camera.width);
         let mut fill = Fill {
             table: self,
             intervals,
@@ -860,15 +870,15 @@ impl CoverageTable {
 
     /// Number of columns.
     pub fn columns(&self) -> usize {
-        self.start.len().saturating_sub(1)
+        self.spans.len()
     }
 
     /// Column `c`'s branches and fractions.
     pub fn column(&self, c: usize) -> &[(Branch, f64)] {
-        match (self.start.get(c), self.start.get(c + 1)) {
-            (Some(&a), Some(&b)) => self.entries.get(a..b).unwrap_or(&[]),
-            _ => &[],
-        }
+        self.spans
+            .get(c)
+            .and_then(|&(a, b)| self.entries.get(a..b))
+            .unwrap_or(&[])
     }
 
     /// The branch covering most of column `c` (the first of equal ones).
@@ -956,7 +966,7 @@ impl<I: Interval> Cover for Fill<'_, I> {
             .map_or(&[][..], |i| i.branch());
         let t = &mut *self.table;
         // A column's first piece has no entry to add to.
-        if t.start.last() == Some(&t.entries.len()) {
+        if t.open == t.entries.len() {
             t.entries.push((kept(branch), p.fraction));
         } else {
             t.push(branch, p.fraction);
@@ -966,12 +976,13 @@ impl<I: Interval> Cover for Fill<'_, I> {
     fn whole(&mut self, cols: core::ops::Range<usize>, interval: usize) {
         self.end_columns(cols.start);
         let branch = self.intervals.get(interval).map_or(&[][..], |i| i.branch());
-        let entry = (kept(branch), 1.0);
         let t = &mut *self.table;
-        // One entry per column, each the column's only one: written in place.
+        // One entry for the whole run, each column's only one.
         let first = t.entries.len();
-        t.entries.resize(first + cols.len(), entry);
-        t.start.extend(first + 1..=first + cols.len());
+        t.entries.push((kept(branch), 1.0));
+        t.spans
+            .resize(t.spans.len() + cols.len(), (first, first + 1));
+        t.open = first + 1;
         self.col = cols.end;
     }
 }
@@ -1784,10 +1795,11 @@ mod tests {
         t
     }
 
-    /// `CoverageTable::exact` (runs of whole columns without their edges, boundaries
-    /// placed by their image coordinate) equals the table of `coverage`'s pieces, bit for
-    /// bit: boundaries anywhere, exactly on column edges, known in `f64` only, on cameras
-    /// of every width and field of view, and on one whose edges are not known in order.
+    /// `CoverageTable::exact` (runs of whole columns without their edges, each run one
+    /// shared entry, boundaries placed by their image coordinate) equals the table of
+    /// `coverage`'s pieces column by column, bit for bit: boundaries anywhere, exactly on
+    /// column edges, known in `f64` only, on cameras of every width and field of view, and
+    /// on one whose edges are not known in order.
     #[cfg(feature = "alloc")]
     #[test]
     fn exact_table_equals_the_pieces() {
@@ -1801,7 +1813,7 @@ mod tests {
         let eye = crate::QueryPoint::from_raw(0, 0).unwrap();
         let branches: [&[u32]; 4] = [&[], &[1], &[2, 1], &[3]];
         let mut reused = CoverageTable::new();
-        let mut jumps = 0;
+        let (mut jumps, mut shared) = (0, 0);
         for case in 0..3000 {
             let unit = |r: u64| (r % 1_000_000) as f64 / 1_000_000.0;
             let heading = unit(next()) * core::f64::consts::TAU;
@@ -1842,11 +1854,48 @@ mod tests {
             }
             ivs.sort_by(|a, b| a.start.total_cmp(&b.start));
             let want = by_pieces(&camera, &ivs);
-            assert_eq!(CoverageTable::exact(&camera, &ivs), want, "case {case}");
+            let table = CoverageTable::exact(&camera, &ivs);
+            assert_eq!(table.columns(), width, "case {case}");
+            for c in 0..width {
+                assert_eq!(table.column(c), want.column(c), "case {case}, column {c}");
+            }
+            assert_eq!(table, want, "case {case}");
+            shared += usize::from(table.entries.len() < want.entries.len());
             reused.exact_into(&camera, &ivs);
             assert_eq!(reused, want, "case {case}, reused");
         }
         assert!(jumps > 2000, "{jumps}");
+        assert!(shared > 1000, "{shared}");
+    }
+
+    /// Tables compare by columns: a run sharing one entry equals the same columns written
+    /// one by one, and a column of another fraction, branch or length differs.
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn tables_compare_by_columns() {
+        let (a, b) = (&[ObjectId(1)][..], &[ObjectId(2)][..]);
+        let camera = Camera::new(crate::QueryPoint::from_raw(0, 0).unwrap(), 0.0, 1.0, 3);
+        let ivs = [Iv {
+            exact: None,
+            start: 0.0,
+            branch: a.to_vec(),
+        }];
+        let shared = CoverageTable::exact(&camera.unwrap(), &ivs);
+        let columns = |cols: &[&[(&[ObjectId], f64)]]| {
+            let mut t = CoverageTable::new();
+            for col in cols {
+                col.iter().for_each(|&(br, f)| t.push(br, f));
+                t.end_column();
+            }
+            t
+        };
+        let whole: &[_] = &[(a, 1.0)];
+        assert!(shared.entries.len() < shared.columns(), "{shared:?}");
+        assert_eq!(shared, columns(&[whole, whole, whole]));
+        assert_ne!(shared, columns(&[whole, whole]));
+        assert_ne!(shared, columns(&[whole, &[(a, 0.5)], whole]));
+        assert_ne!(shared, columns(&[whole, whole, &[(b, 1.0)]]));
+        assert_ne!(shared, columns(&[whole, &[(a, 1.0), (b, 0.0)], whole]));
     }
 
     /// The magic-number rounding agrees with `libm::round` away from ties, rounds ties to
