@@ -2,12 +2,12 @@
 //! targets (`fuzz/`), the property harness (`tests/tests/degenerate.rs`) and the replay of
 //! the committed regressions (`tests/tests/fuzz_regressions.rs`).
 //!
-//! **Inputs.** [`BuildInput`], [`LocateInput`], [`WalkInput`], [`RayTreeInput`] and
-//! [`IncrementalInput`] (one per fuzz target) are small structures that implement
-//! [`Arbitrary`] (so libFuzzer and proptest drive them from bytes, see [`decode`]) and
-//! print with `{:?}` as Rust code: with `use vcx_tests::generators::{*, Dir8::*,
-//! DirSpec::*, Gap::*, Mat::*, Place::*, PointSpec::*, Shape::*};` a printed input pastes
-//! into a test as an expression.
+//! **Inputs.** [`BuildInput`], [`LocateInput`], [`WalkInput`], [`RayTreeInput`],
+//! [`IncrementalInput`] and [`CoverageInput`] (one per fuzz target) are small structures
+//! that implement [`Arbitrary`] (so libFuzzer and proptest drive them from bytes, see
+//! [`decode`]) and print with `{:?}` as Rust code: with `use vcx_tests::generators::{*,
+//! Dir8::*, DirSpec::*, Gap::*, Mat::*, Place::*, PointSpec::*, Shape::*, StartSpec::*};`
+//! a printed input pastes into a test as an expression.
 //!
 //! **Scenes.** A [`SceneSpec`] lays shapes on a coarse grid of `2^step` raw units (raw unit =
 //! 2⁻¹⁶, the finest grid), so that collinear vertices, shared supporting lines and parallel
@@ -35,6 +35,7 @@
 //! * [`check_incremental`]: the randomized incremental construction against the sweep
 //!   after every insertion, with memory budgets and rollback;
 //! * [`check_scene_json`]: the JSON scene loader.
+//! * [`check_coverage`]: the coverage table against the column-by-column pieces.
 
 use core::fmt::{Debug, Formatter, Result as FmtResult};
 
@@ -1864,4 +1865,100 @@ pub fn check_incremental(input: &IncrementalInput) -> Result<usize, String> {
         }
     }
     Ok(rollbacks)
+}
+
+// ---------------------------------------------------------------------------------------
+// Coverage tables.
+
+/// Where an interval of [`CoverageInput`] starts.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Arbitrary)]
+pub enum StartSpec {
+    /// Exactly on column edge `c` (modulo `width + 1`).
+    Edge(u16),
+    /// Next to column edge `c`: its integer vector plus a small offset.
+    Near(u16, i8, i8),
+    /// Any direction.
+    Any(i16, i16),
+}
+
+/// A camera and interval starts for [`check_coverage`]: starts on, next to or away from
+/// column edges, each exact or known in `f64` only (`true`: exact), with one of four
+/// branches; fields of view `(m + 1)/2¹⁶ · 2⁻ᵉ · 179°` (`e < 48`), down to columns
+/// narrower than the rounding of their edges.
+#[derive(Clone, PartialEq, Eq, Debug, Arbitrary)]
+pub struct CoverageInput {
+    /// Heading, `h/2¹⁶` of a turn.
+    pub heading: u16,
+    /// `(m, e)` of the field of view.
+    pub fov: (u16, u8),
+    /// Width, `w mod 1024 + 1` columns.
+    pub width: u16,
+    /// The starts used: the first `count mod 9`.
+    pub count: u8,
+    /// Starts, whether exact, and branch ids.
+    pub starts: [(StartSpec, bool, u8); 8],
+}
+
+/// [`CoverageTable::exact`] (runs of whole columns placed by image coordinate, one entry
+/// per run) against the table of [`coverage`]'s pieces (every column edge computed), column
+/// by column, for the camera and intervals of `input`. `Ok` for a camera `Camera::new`
+/// rejects.
+pub fn check_coverage(input: &CoverageInput) -> Result<(), String> {
+    use vcx::render::{coverage, Branch, Camera, CoverageTable, FrameInterval, Interval};
+    let eye = QueryPoint::from_raw(0, 0).ok_or("eye")?;
+    let heading = f64::from(input.heading) / 65536.0 * core::f64::consts::TAU;
+    let (m, e) = input.fov;
+    let fov = (f64::from(m) + 1.0) / 65536.0 * 2f64.powi(-i32::from(e % 48)) * 179f64.to_radians();
+    let width = usize::from(input.width % 1024) + 1;
+    let Ok(camera) = Camera::new(eye, heading, fov, width) else {
+        return Ok(());
+    };
+    let edge = |c: u16| camera.edge(usize::from(c) % (width + 1)).vector;
+    let mut ivs = Vec::new();
+    for &(spec, exact, branch) in input.starts.iter().take(usize::from(input.count % 9)) {
+        let v = match spec {
+            StartSpec::Edge(c) => edge(c),
+            StartSpec::Near(c, dx, dy) => {
+                let v = edge(c);
+                (v.0 + i64::from(dx), v.1 + i64::from(dy))
+            }
+            StartSpec::Any(x, y) => (i64::from(x), i64::from(y)),
+        };
+        let Some(d) = Direction::new(v.0, v.1) else {
+            continue;
+        };
+        let a = Angle::constant(d);
+        let branch =
+            Branch::from_slice(&[ObjectId(u32::from(branch % 4))]).map_err(|_| "branch")?;
+        ivs.push(FrameInterval {
+            start: a.radians(),
+            exact_start: exact.then_some(a),
+            branch,
+        });
+    }
+    ivs.sort_by(|a, b| a.start.total_cmp(&b.start));
+    let mut want = CoverageTable::new();
+    let mut col = 0;
+    coverage(&camera, &ivs, |p| {
+        while col < p.column {
+            want.end_column();
+            col += 1;
+        }
+        let branch = ivs.get(p.interval).map_or(&[][..], |i| i.branch());
+        want.push(branch, p.fraction);
+    });
+    while col < width {
+        want.end_column();
+        col += 1;
+    }
+    let table = CoverageTable::exact(&camera, &ivs);
+    match (0..width).find(|&c| table.column(c) != want.column(c)) {
+        None if table.columns() == width => Ok(()),
+        None => Err(format!("{} columns, not {width}", table.columns())),
+        Some(c) => Err(format!(
+            "column {c}: table {:?}, pieces {:?}",
+            table.column(c),
+            want.column(c)
+        )),
+    }
 }

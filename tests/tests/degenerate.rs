@@ -9,6 +9,8 @@
 //! * ray trees at depth 1–2 against the reference (`ray_tree`);
 //! * the randomized incremental construction against the sweep after every insertion, with
 //!   memory budgets and rollback (`ric`).
+//! * the coverage table's runs of whole columns against the column-by-column pieces
+//!   (`coverage`).
 //!
 //! Case counts are sized for CI: about 10 s with two free cores (20 s on one) with the
 //! test profile's opt-level 2. `PROPTEST_CASES=N` sets every property here to `N` cases for
@@ -19,8 +21,9 @@
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use vcx_tests::generators::{
-    check_build, check_incremental, check_locate, check_ray_tree, check_walk, decode, BuildInput,
-    IncrementalInput, LocateInput, RayTreeInput, Shape, WalkInput,
+    check_build, check_coverage, check_incremental, check_locate, check_ray_tree, check_walk,
+    decode, BuildInput, CoverageInput, IncrementalInput, LocateInput, RayTreeInput, Shape,
+    WalkInput,
 };
 
 /// `PROPTEST_CASES` if set, else `default`. (`ProptestConfig::with_cases` ignores the
@@ -100,6 +103,17 @@ proptest! {
     fn incremental_construction_is_the_sweep(b in bytes()) {
         if let Some(input) = decode::<IncrementalInput>(&b) {
             check_incremental(&input).map(drop).map_err(|e| fail("ric", &input, &b, &e))?;
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(50_000))]
+
+    #[test]
+    fn coverage_table_equals_the_pieces(b in bytes()) {
+        if let Some(input) = decode::<CoverageInput>(&b) {
+            check_coverage(&input).map_err(|e| fail("coverage", &input, &b, &e))?;
         }
     }
 }

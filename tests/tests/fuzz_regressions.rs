@@ -11,8 +11,9 @@
 use std::path::{Path, PathBuf};
 
 use vcx_tests::generators::{
-    check_build, check_incremental, check_locate, check_ray_tree, check_scene_json, check_walk,
-    decode, BuildInput, IncrementalInput, LocateInput, RayTreeInput, WalkInput,
+    check_build, check_coverage, check_incremental, check_locate, check_ray_tree, check_scene_json,
+    check_walk, decode, BuildInput, CoverageInput, IncrementalInput, LocateInput, RayTreeInput,
+    WalkInput,
 };
 
 /// The targets with a directory under `fuzz/regressions/`.
@@ -24,6 +25,7 @@ const TARGETS: &[&str] = &[
     "ric",
     "scene_json",
     "scene",
+    "coverage",
 ];
 
 /// `(target, file)` of the Rust-expression regressions compiled in below.
@@ -62,6 +64,7 @@ fn run(target: &str, bytes: &[u8]) -> Result<(), String> {
         }
         "scene_json" => core::str::from_utf8(bytes).map_or(Ok(()), check_scene_json),
         "scene" => Ok(()),
+        "coverage" => decode::<CoverageInput>(bytes).map_or(Ok(()), |i| check_coverage(&i)),
         _ => Err(format!("unknown target {target}")),
     }
 }
@@ -123,6 +126,11 @@ fn scene_json() {
     println!("{} replayed", replay("scene_json"));
 }
 
+#[test]
+fn coverage() {
+    println!("{} replayed", replay("coverage"));
+}
+
 /// Every directory under `fuzz/regressions/` is a target replayed above, and every `*.rs`
 /// input there is compiled in below.
 #[test]
@@ -158,6 +166,7 @@ fn every_regression_is_replayed() {
 
 use vcx_tests::generators::{
     Dir8::*, DirSpec::*, Gap::*, Mat::*, Obj, Place::*, PointSpec::*, RaySpec, SceneSpec, Shape::*,
+    StartSpec::*,
 };
 
 #[test]
@@ -396,5 +405,21 @@ fn printed_inputs_are_rust() {
         screens_first: true,
         budget: Some((40, 200)),
         rays: vec![],
+    });
+    round_trip!(CoverageInput {
+        heading: 3,
+        fov: (65535, 41),
+        width: 799,
+        count: 8,
+        starts: [
+            (Edge(4), true, 1),
+            (Near(5, -1, 2), false, 0),
+            (Any(-7, 300), true, 3),
+            (Edge(0), false, 2),
+            (Edge(1), true, 0),
+            (Edge(2), true, 0),
+            (Edge(3), true, 0),
+            (Edge(5), true, 0),
+        ],
     });
 }
