@@ -854,8 +854,7 @@ impl CoverageTable {
     }
 
     /// [`CoverageTable::exact`] into `self` (cleared first), reusing its buffers. Runs of
-    /// whole columns take no column edges ([`merge`]), and a column's first piece no
-    /// search among the column's branches.
+    /// whole columns take no column edges ([`merge`]) and one entry each.
     pub fn exact_into<I: Interval>(&mut self, camera: &Camera, intervals: &[I]) {
         self.clear();
         self.spans.reserve(camera.width);
@@ -964,13 +963,7 @@ impl<I: Interval> Cover for Fill<'_, I> {
             .intervals
             .get(p.interval)
             .map_or(&[][..], |i| i.branch());
-        let t = &mut *self.table;
-        // A column's first piece has no entry to add to.
-        if t.open == t.entries.len() {
-            t.entries.push((kept(branch), p.fraction));
-        } else {
-            t.push(branch, p.fraction);
-        }
+        self.table.push(branch, p.fraction);
     }
 
     fn whole(&mut self, cols: core::ops::Range<usize>, interval: usize) {

@@ -29,9 +29,9 @@ use std::time::Instant;
 
 use serde_json::json;
 use vcx::partition::{build_by_sweep, BuildOptions, Complex, Cylinder, History};
-use vcx::render::{centre_hits, coverage, Camera, FrameInterval, Interval};
+use vcx::render::{angle_order, centre_hits, coverage, Camera, FrameInterval, Interval};
 use vcx::walk::{frame_tree_into, TreeScratch, WalkError};
-use vcx::{Material, ObjectId, QueryPoint, SubScene};
+use vcx::{Material, ObjectId, QueryPoint, SceneRef, SubScene};
 
 use super::{write_stdout, Failure};
 use vcx_demo::generate::{generate, SceneKind};
@@ -403,20 +403,8 @@ pub(crate) fn measure_views(
                     // without allocating, as a device does: the scratch and the buffer of
                     // intervals are reused from frame to frame.
                     Some(cam) => {
-                        let (from, to) = cam.range();
-                        kept.clear();
-                        let mut fits = true;
-                        frame_tree_into(&complex, &scene, q, depth, from, to, &mut tree, |i| {
-                            match FrameInterval::new(&i) {
-                                Some(f) => kept.push(f),
-                                None => fits = false,
-                            }
-                        })
-                        .map_err(internal)?;
-                        if !fits {
-                            return Err(internal(WalkError::TreeTooDeep));
-                        }
-                        vcx::render::angle_order(&mut kept);
+                        walk_frame(&complex, &scene, cam, depth, &mut tree, &mut kept)
+                            .map_err(internal)?;
                         self::frame(&scene, camera.as_ref(), &kept, &mut columns);
                         kept.len()
                     }
@@ -452,6 +440,32 @@ pub(crate) fn measure_views(
         events: events as f64 / used as f64,
         intervals: boundaries as f64 / used as f64,
     })
+}
+
+/// The ray tree over `cam`'s field of view into `kept`, in start-angle order: walked in
+/// lock step without allocating, as a device does, the scratch and `kept` reused.
+pub(crate) fn walk_frame(
+    complex: &Complex,
+    scene: &SceneRef<'_>,
+    cam: &Camera,
+    depth: usize,
+    scratch: &mut TreeScratch<64>,
+    kept: &mut Vec<FrameInterval>,
+) -> Result<(), WalkError> {
+    let (from, to) = cam.range();
+    kept.clear();
+    let mut fits = true;
+    frame_tree_into(complex, scene, cam.eye(), depth, from, to, scratch, |i| {
+        match FrameInterval::new(&i) {
+            Some(f) => kept.push(f),
+            None => fits = false,
+        }
+    })?;
+    if !fits {
+        return Err(WalkError::TreeTooDeep);
+    }
+    angle_order(kept);
+    Ok(())
 }
 
 /// The per-column work of a frame after the sweep (nothing without a camera): the interval

@@ -36,13 +36,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde_json::{json, Value};
-use vcx::partition::Complex;
 use vcx::partition::{build_by_sweep, point_in_scene};
-use vcx::render::{angle_order, Camera, CoverageTable, FrameInterval};
-use vcx::walk::{frame_tree_into, TreeScratch, WalkError};
+use vcx::render::{Camera, CoverageTable};
+use vcx::walk::{TreeScratch, WalkError};
 use vcx::{QueryPoint, SceneRef};
 use vcx_baselines::{render, render_columns, BvhCaster, Caster, Prepared, Quadtree};
 
+use super::bench::walk_frame;
 use super::{write_stdout, Failure};
 
 /// Arguments of `vcx bench error`.
@@ -394,31 +394,6 @@ pub(crate) struct Measured {
     pub bvh: Vec<Point>,
 }
 
-/// The ray tree over `cam`'s field of view into `kept`, in start-angle order.
-fn frame(
-    complex: &Complex,
-    scene: &SceneRef<'_>,
-    cam: &Camera,
-    depth: usize,
-    scratch: &mut TreeScratch<64>,
-    kept: &mut Vec<FrameInterval>,
-) -> Result<(), WalkError> {
-    let (from, to) = cam.range();
-    kept.clear();
-    let mut fits = true;
-    frame_tree_into(complex, scene, cam.eye(), depth, from, to, scratch, |i| {
-        match FrameInterval::new(&i) {
-            Some(f) => kept.push(f),
-            None => fits = false,
-        }
-    })?;
-    if !fits {
-        return Err(WalkError::TreeTooDeep);
-    }
-    angle_order(kept);
-    Ok(())
-}
-
 /// Measures the complex and both casters on `scene` (the module documentation).
 pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Failure> {
     a.check()?;
@@ -446,7 +421,7 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
     let mut table = CoverageTable::new();
     for cam in &cameras {
         let r = timed(&mut times, a.repeat, || {
-            frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)?;
+            walk_frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)?;
             table.exact_into(cam, &kept);
             Ok::<_, WalkError>(kept.len())
         });
@@ -456,7 +431,7 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
             timed(&mut tree_times, a.repeat, || {
-                frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)
+                walk_frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)
             })
             .map_err(internal)?;
             timed(&mut cover_times, a.repeat, || table.exact_into(cam, &kept));
