@@ -215,6 +215,27 @@ struct Piece {
     boundary: Boundary,
 }
 
+impl Piece {
+    /// A piece to overwrite ([`PrimaryWalk::next_piece`], [`RangeWalk::next_piece`]).
+    fn empty() -> Piece {
+        Piece {
+            from: Dir::at(Angle::ZERO),
+            to: Dir::at(Angle::ZERO),
+            ceiling: None,
+            boundary: Boundary {
+                exact: None,
+                rule: Rule {
+                    stage: 0,
+                    eye: QueryPoint::default(),
+                    dir: (0, 0),
+                    level: 0,
+                    fallback: None,
+                },
+            },
+        }
+    }
+}
+
 /// One change of eye: a ray from `prev` hits the line of the edge `a → b` (global vertex
 /// indices) and continues on a line through `next`.
 #[derive(Clone, Copy, Debug)]
@@ -239,7 +260,7 @@ struct Tree<'a, 's, S: Storage> {
 /// object: entry split, exit split and the walk), plus one per screen along the way;
 /// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
 /// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `2 096 + 1 200·N` bytes on x86-64 — `N` frames (656 bytes)
+/// Reused across trees. Size: `2 112 + 1 200·N` bytes on x86-64 — `N` frames (656 bytes)
 /// with the 1024-bit exact directions of their mapped range ends (544 bytes, see
 /// [`Frames::Exacts`]), and the hops, the branch and the start hints of anchored walks
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks
@@ -270,6 +291,9 @@ struct Stacks<F: Frames> {
     /// The start cylinders last found by anchored walks ([`Tree::locate_floor`]).
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     floors: Floors,
+    /// The places of frames that left the stack, held by others ([`Level::held`]): a
+    /// stack of `N` frames holds `N` with these, as it would hold the frames themselves.
+    held: usize,
 }
 
 /// Per floor object (direct-mapped by its id), the start cylinder of the last walk anchored
@@ -296,7 +320,43 @@ impl<F: Frames> Stacks<F> {
             exacts,
             #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
             floors: [None; FLOOR_HINTS],
+            held: 0,
         }
+    }
+
+    /// [`WalkError::TreeTooDeep`] unless `n` more frames fit beside the held places.
+    fn room(&self, n: usize) -> Result<(), WalkError> {
+        if self.frames.room() < self.held + n {
+            return Err(WalkError::TreeTooDeep);
+        }
+        Ok(())
+    }
+
+    /// Pushes `f` of `level`, which takes its held places too.
+    fn push(&mut self, level: Level, f: Frame) -> Result<(), WalkError> {
+        self.room(1 + level.held)?;
+        self.frames.push(f)?;
+        self.held += level.held;
+        Ok(())
+    }
+
+    /// Pops the top frame of `level`, leaving what it pushed with it.
+    fn leave(&mut self, level: Level) {
+        self.frames.pop();
+        self.held = self.held.saturating_sub(level.held);
+    }
+
+    /// Pops the exhausted top frame of `level` and what it pushed with it.
+    fn pop(&mut self, level: Level) {
+        self.leave(level);
+        self.restore(level);
+    }
+
+    /// Drops what the frame of `level` pushed with it.
+    fn restore(&mut self, level: Level) {
+        self.hops.truncate(level.hops);
+        self.branch.truncate(level.branch);
+        self.exacts.truncate_to(level.exacts);
     }
 }
 
@@ -308,6 +368,8 @@ trait Frames {
     /// none: the stack never holds more entries than there are frames, so a capacity of
     /// `N` entries for `N` frames never overflows (two exact directions each: 2·`N`).
     type Exacts: ExactStack;
+    /// How many more frames fit.
+    fn room(&self) -> usize;
     fn push(&mut self, f: Frame) -> Result<(), WalkError>;
     fn pop(&mut self);
     fn top(&mut self) -> Option<&mut Frame>;
@@ -340,31 +402,57 @@ trait ExactStack {
     }
 }
 
-impl<const N: usize> ExactStack for heapless::Vec<ExactPair, N> {
-    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError> {
+/// A stack of [`ExactPair`]s over `V`, whose popped entries stay as slots for the next
+/// pushes: an entry is reserved without zeroing and copying its 544 bytes (the stale
+/// directions of a reused slot are never read: an end points at its slot only once written).
+struct ExactSlots<V> {
+    slots: V,
+    len: usize,
+}
+
+impl<V> ExactSlots<V> {
+    const fn new(slots: V) -> Self {
+        ExactSlots { slots, len: 0 }
+    }
+}
+
+/// Storage that grows by one zero entry ([`ExactSlots`]).
+#[cfg_attr(
+    not(any(feature = "mirrors", feature = "refraction")),
+    allow(dead_code)
+)]
+trait Grow: core::ops::DerefMut<Target = [ExactPair]> {
+    fn grow(&mut self) -> Result<(), WalkError>;
+}
+
+impl<const N: usize> Grow for heapless::Vec<ExactPair, N> {
+    fn grow(&mut self) -> Result<(), WalkError> {
         self.push(ExactPair::default())
-            .map_err(|_| WalkError::TreeTooDeep)?;
-        split_top(self)
-    }
-    fn truncate_to(&mut self, len: usize) {
-        self.truncate(len)
-    }
-    fn entries(&self) -> &[ExactPair] {
-        self
+            .map_err(|_| WalkError::TreeTooDeep)
     }
 }
 
 #[cfg(feature = "alloc")]
-impl ExactStack for Vec<ExactPair> {
-    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError> {
+impl Grow for Vec<ExactPair> {
+    fn grow(&mut self) -> Result<(), WalkError> {
         self.push(ExactPair::default());
-        split_top(self)
+        Ok(())
+    }
+}
+
+impl<V: Grow> ExactStack for ExactSlots<V> {
+    fn reserve(&mut self) -> Result<Reserved<'_>, WalkError> {
+        if self.len == self.slots.len() {
+            self.slots.grow()?;
+        }
+        self.len += 1;
+        split_top(self.slots.get_mut(..self.len).ok_or(WalkError::Corrupt)?)
     }
     fn truncate_to(&mut self, len: usize) {
-        self.truncate(len)
+        self.len = self.len.min(len);
     }
     fn entries(&self) -> &[ExactPair] {
-        self
+        self.slots.get(..self.len).unwrap_or(&[])
     }
 }
 
@@ -379,7 +467,10 @@ fn split_top(s: &mut [ExactPair]) -> Result<Reserved<'_>, WalkError> {
 }
 
 impl<const N: usize> Frames for heapless::Vec<Frame, N> {
-    type Exacts = heapless::Vec<ExactPair, N>;
+    type Exacts = ExactSlots<heapless::Vec<ExactPair, N>>;
+    fn room(&self) -> usize {
+        N - self.len()
+    }
     fn push(&mut self, f: Frame) -> Result<(), WalkError> {
         heapless::Vec::push(self, f).map_err(|_| WalkError::TreeTooDeep)
     }
@@ -398,7 +489,10 @@ impl<const N: usize> Frames for heapless::Vec<Frame, N> {
 // be moved and cleared on every call.
 #[cfg(feature = "alloc")]
 impl Frames for Vec<Frame> {
-    type Exacts = Vec<ExactPair>;
+    type Exacts = ExactSlots<Vec<ExactPair>>;
+    fn room(&self) -> usize {
+        usize::MAX
+    }
     fn push(&mut self, f: Frame) -> Result<(), WalkError> {
         Vec::push(self, f);
         Ok(())
@@ -418,7 +512,7 @@ impl<const N: usize> TreeScratch<N> {
     /// Empty scratch.
     pub const fn new() -> Self {
         TreeScratch {
-            stacks: Stacks::new(heapless::Vec::new(), heapless::Vec::new()),
+            stacks: Stacks::new(heapless::Vec::new(), ExactSlots::new(heapless::Vec::new())),
         }
     }
 }
@@ -450,8 +544,8 @@ enum Frame {
 }
 
 /// What every frame shares: its eye, the depth left to its pieces, its walking direction
-/// (counter-clockwise primary directions map to `ccw` ones from its eye) and the lengths of
-/// the hop and branch stacks to restore when it is popped.
+/// (counter-clockwise primary directions map to `ccw` ones from its eye), the lengths of
+/// the hop and branch stacks to restore when it is popped and the places it holds.
 #[cfg_attr(
     not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
     allow(dead_code)
@@ -464,6 +558,10 @@ struct Level {
     hops: usize,
     branch: usize,
     exacts: usize,
+    /// The places of the frames that left the stack with their last piece, which this one
+    /// continues: it stands for them in the stack's capacity until it is popped (they
+    /// would have been popped right after it) and restores the stacks as they would have.
+    held: usize,
 }
 
 /// The primary walk restricted to the range `(f, t)` (exact positions: the lap of the walk
@@ -757,7 +855,7 @@ fn collect<S: Storage>(
     vertices: bool,
     context: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    let mut stacks = Stacks::new(Vec::new(), Vec::new());
+    let mut stacks = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
     let mut out = Vec::new();
     let mut sink = |i: Interval<'_>| {
         out.push(TreeInterval {
@@ -833,6 +931,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     let tree = Tree { complex, scene };
     let (f, t) = (Angle::constant(from), Angle::constant(to));
     scratch.frames.clear();
+    scratch.held = 0;
     scratch.hops.clear();
     scratch.branch.clear();
     scratch.exacts.truncate_to(0);
@@ -853,31 +952,10 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
         em.left_of_f = tree.left_of(scratch, q, start, depth, f)?;
     }
     let primary = tree.primary_walk(q, tree.primary_start(q, start, &f), depth, f, t, false);
-    scratch.frames.push(Frame::Primary(primary))?;
+    scratch.push(primary.level, Frame::Primary(primary))?;
     tree.drive(scratch, &mut em)?;
     em.finish();
     Ok(())
-}
-
-/// What the top frame yields.
-#[allow(clippy::large_enum_variant)] // moved once, into the frame that resolves it
-enum Item {
-    /// A piece to resolve.
-    Piece(Level, Piece),
-    /// An edge piece of a split: the range in the frame's direction, its first boundary and
-    /// the edge (global vertex indices).
-    #[cfg(any(feature = "mirrors", feature = "refraction"))]
-    Edge(
-        Level,
-        ObjectId,
-        SplitKind,
-        Dir,
-        Dir,
-        Boundary,
-        (usize, usize),
-    ),
-    /// The frame is exhausted.
-    Done(Level),
 }
 
 impl<S: Storage> Tree<'_, '_, S> {
@@ -913,6 +991,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 hops: 0,
                 branch: 0,
                 exacts: 0,
+                held: 0,
             },
             events: Events::new(walker, true),
             f,
@@ -969,13 +1048,14 @@ impl<S: Storage> Tree<'_, '_, S> {
         f: Angle,
     ) -> Result<Option<Branch>, WalkError> {
         let mut walk = self.primary_walk(q, (start, Angle::ZERO), depth, f, f, true);
-        let mut last = None;
-        while let Some(p) = walk.next_piece(self)? {
-            last = Some(p);
+        let mut last = Piece::empty();
+        let mut any = false;
+        while walk.next_piece(self, &mut last)? {
+            any = true;
         }
-        let Some(last) = last else {
+        if !any {
             return Ok(None);
-        };
+        }
         if !walk.closed_on_boundary && !self.vertex_on_ray(q, &f, last.ceiling) {
             return Ok(None);
         }
@@ -988,7 +1068,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             left_of_f: None,
             current: None,
         };
-        self.resolve_piece(scratch, walk.level, last, &mut em)?;
+        self.resolve_piece(scratch, walk.level, &mut last, &mut em, false)?;
         self.drive(scratch, &mut em)?;
         em.finish();
         Ok(left)
@@ -1006,45 +1086,59 @@ impl<S: Storage> Tree<'_, '_, S> {
         sc: &mut Stacks<F>,
         em: &mut Emitter<'_, K>,
     ) -> Result<(), WalkError> {
+        let mut piece = Piece::empty();
         loop {
             let (stage, level_len) = (sc.hops.len(), sc.branch.len());
             let Some(top) = sc.frames.top() else {
                 return Ok(());
             };
-            let item = match top {
-                Frame::Primary(w) => match w.next_piece(self)? {
-                    Some(p) => Item::Piece(w.level, p),
-                    None => Item::Done(w.level),
-                },
-                #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-                Frame::Walk(w) => match w.next_piece(self, sc.exacts.flat(), stage, level_len)? {
-                    Some(p) => Item::Piece(w.level, p),
-                    None => Item::Done(w.level),
-                },
-                #[cfg(any(feature = "mirrors", feature = "refraction"))]
-                Frame::Split(s) => match s.next_edge(self, sc.exacts.flat(), stage, level_len) {
-                    Some((lo, hi, b, e)) => Item::Edge(s.level, s.m, s.kind, lo, hi, b, e),
-                    None => Item::Done(s.level),
-                },
-            };
-            match item {
-                Item::Piece(level, p) => self.resolve_piece(sc, level, p, em)?,
-                #[cfg(any(feature = "mirrors", feature = "refraction"))]
-                Item::Edge(level, m, kind, lo, hi, b, e) => {
-                    self.change_eye(sc, level, m, kind, (lo, hi), b, e)?
+            // A piece is written in place and resolved by reference, an edge resolved where
+            // it is made: every move of a piece (224 bytes) is a copy.
+            match top {
+                Frame::Primary(w) => {
+                    let level = w.level;
+                    if w.next_piece(self, &mut piece)? {
+                        self.resolve_piece(sc, level, &mut piece, em, false)?;
+                    } else {
+                        sc.pop(level);
+                    }
                 }
-                Item::Done(level) => {
-                    sc.frames.pop();
-                    sc.hops.truncate(level.hops);
-                    sc.branch.truncate(level.branch);
-                    sc.exacts.truncate_to(level.exacts);
+                #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+                Frame::Walk(w) => {
+                    let level = w.level;
+                    if w.next_piece(self, sc.exacts.flat(), stage, level_len, &mut piece)? {
+                        // Its last piece: the walk leaves the stack now.
+                        let left = w.done;
+                        if left {
+                            sc.leave(level);
+                        }
+                        self.resolve_piece(sc, level, &mut piece, em, left)?;
+                    } else {
+                        sc.pop(level);
+                    }
+                }
+                #[cfg(any(feature = "mirrors", feature = "refraction"))]
+                Frame::Split(s) => {
+                    let (level, m, kind) = (s.level, s.m, s.kind);
+                    match s.next_edge(self, sc.exacts.flat(), stage, level_len, &mut piece) {
+                        // Done with its last edge piece, the split leaves the stack now.
+                        Some(e) if s.done => {
+                            sc.leave(level);
+                            self.change_eye(sc, level, m, kind, &piece, e, true)?
+                        }
+                        Some(e) => self.change_eye(sc, level, m, kind, &piece, e, false)?,
+                        None => sc.pop(level),
+                    }
                 }
             }
         }
     }
 
     /// Resolves the piece `p` seen from the frame `level` by its ceiling's material: a leaf,
-    /// or the frame that walks on behind it.
+    /// or the frames that walk on behind it (`p` may be overwritten). `left`: the frame has
+    /// left the stack with this, its last piece (sparing the driver a step); the stacks are
+    /// restored as its pop would have, after a leaf or by the frame pushed in its place,
+    /// which holds its place in the capacity.
     // Without any ray type past the primary view, every piece is a leaf.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
@@ -1054,35 +1148,45 @@ impl<S: Storage> Tree<'_, '_, S> {
         &self,
         sc: &mut Stacks<F>,
         level: Level,
-        p: Piece,
+        p: &mut Piece,
         em: &mut Emitter<'_, K>,
+        left: bool,
     ) -> Result<(), WalkError> {
         let Some(c) = p.ceiling else {
-            return em.leaf(self, &sc.hops, &sc.branch, &p.boundary);
+            em.leaf(self, &sc.hops, &sc.branch, &p.boundary)?;
+            if left {
+                sc.restore(level);
+            }
+            return Ok(());
         };
         let material = self.scene.object(c).ok_or(WalkError::Corrupt)?.material;
-        // A frame pushed here restores the stacks as they are now.
+        // A frame pushed here restores the stacks as they are now, or in place of `level`'s.
         #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-        let here = Level {
-            hops: sc.hops.len(),
-            branch: sc.branch.len(),
-            exacts: sc.exacts.entries().len(),
-            ..level
+        let here = if left {
+            Level {
+                held: level.held + 1,
+                ..level
+            }
+        } else {
+            Level {
+                hops: sc.hops.len(),
+                branch: sc.branch.len(),
+                exacts: sc.exacts.entries().len(),
+                held: 0,
+                ..level
+            }
         };
         match material {
             #[cfg(feature = "screens")]
             Material::Screen => {
-                self.push_range_walk(sc, here, c, (p.from, p.to), p.boundary, false)
+                self.push_range_walk(sc, here, c, (&p.from, &p.to), p.boundary, false)
             }
             #[cfg(feature = "mirrors")]
-            Material::Mirror if level.depth > 0 => {
-                sc.frames
-                    .push(Frame::Split(Split::new(here, c, SplitKind::Mirror, p)))
-            }
+            Material::Mirror if level.depth > 0 => self.split(sc, here, c, SplitKind::Mirror, p),
             #[cfg(feature = "refraction")]
-            Material::Refractive { eta } if level.depth > 0 => sc
-                .frames
-                .push(Frame::Split(Split::new(here, c, SplitKind::Entry(eta), p))),
+            Material::Refractive { eta } if level.depth > 0 => {
+                self.split(sc, here, c, SplitKind::Entry(eta), p)
+            }
             // The ray type's code is compiled out (cargo features): an error, never a tree
             // that silently stops at the object.
             _ if continues(material, level.depth) => Err(WalkError::RayTypeDisabled {
@@ -1091,9 +1195,12 @@ impl<S: Storage> Tree<'_, '_, S> {
             }),
             _ => {
                 sc.branch.push(c).map_err(|_| WalkError::TreeTooDeep)?;
-                let r = em.leaf(self, &sc.hops, &sc.branch, &p.boundary);
+                em.leaf(self, &sc.hops, &sc.branch, &p.boundary)?;
                 sc.branch.pop();
-                r
+                if left {
+                    sc.restore(level);
+                }
+                Ok(())
             }
         }
     }
@@ -1114,25 +1221,26 @@ impl<S: Storage> Tree<'_, '_, S> {
 }
 
 impl PrimaryWalk {
-    /// The next piece inside the range, in counter-clockwise order from `f`.
+    /// The next piece inside the range, in counter-clockwise order from `f`, written to
+    /// `out`; `false` (and `out` untouched) when there is none.
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
-    ) -> Result<Option<Piece>, WalkError> {
+        out: &mut Piece,
+    ) -> Result<bool, WalkError> {
         if self.done {
-            return Ok(None);
+            return Ok(false);
         }
         let (q, f) = (self.level.eye, self.f);
         loop {
             // The walk ends past `t` (on lap 2): `t` closes the last piece.
             let Some(c) = self.events.cluster(tree.complex, tree.scene)? else {
                 self.done = true;
-                return Ok(Some(Piece {
-                    from: self.cur_from.clone(),
-                    to: Dir::at(self.t),
-                    ceiling: self.seen,
-                    boundary: self.cur_boundary,
-                }));
+                out.from = self.cur_from.clone();
+                out.to = Dir::at(self.t);
+                out.ceiling = self.seen;
+                out.boundary = self.cur_boundary;
+                return Ok(true);
             };
             let after = tree.complex.ceiling(c.last.cylinder);
             let at_f = match c.lap.cmp(&0) {
@@ -1163,30 +1271,26 @@ impl PrimaryWalk {
             if at_t != Ordering::Less {
                 self.done = true;
                 self.closed_on_boundary = at_t == Ordering::Equal && after != self.seen;
-                let to = if self.close_on_event && self.closed_on_boundary {
+                out.from = self.cur_from.clone();
+                out.to = if self.close_on_event && self.closed_on_boundary {
                     Dir::of(&c.first)
                 } else {
                     Dir::at(self.t)
                 };
-                return Ok(Some(Piece {
-                    from: self.cur_from.clone(),
-                    to,
-                    ceiling: self.seen,
-                    boundary: self.cur_boundary,
-                }));
+                out.ceiling = self.seen;
+                out.boundary = self.cur_boundary;
+                return Ok(true);
             }
             if after != self.seen {
-                let piece = Piece {
-                    from: core::mem::replace(&mut self.cur_from, Dir::of(&c.last)),
-                    to: Dir::of(&c.first),
-                    ceiling: self.seen,
-                    boundary: core::mem::replace(
-                        &mut self.cur_boundary,
-                        tree.event_boundary(0, 0, q, &Dir::of(&c.first)),
-                    ),
-                };
+                out.from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
+                out.to = Dir::of(&c.first);
+                out.ceiling = self.seen;
+                out.boundary = core::mem::replace(
+                    &mut self.cur_boundary,
+                    tree.event_boundary(0, 0, q, &out.to),
+                );
                 self.seen = after;
-                return Ok(Some(piece));
+                return Ok(true);
             }
         }
     }
@@ -2048,7 +2152,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         sc: &mut Stacks<F>,
         level: Level,
         m: ObjectId,
-        (from, to): (Dir, Dir),
+        (from, to): (&Dir, &Dir),
         first: Boundary,
         hint: bool,
     ) -> Result<(), WalkError> {
@@ -2060,7 +2164,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             // never a walk around the full circle.
             let id = match self.scan_floor(eye, m, &to.angle, false) {
                 Err(WalkError::NoStart) => {
-                    self.locate_floor((&mut sc.floors, hint), eye, m, &from, true)?
+                    self.locate_floor((&mut sc.floors, hint), eye, m, from, true)?
                         .0
                 }
                 r => r?,
@@ -2068,7 +2172,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             (id, None)
         } else {
             let (start, theta) =
-                self.locate_floor((&mut sc.floors, hint), eye, m, &from, level.ccw)?;
+                self.locate_floor((&mut sc.floors, hint), eye, m, from, level.ccw)?;
             // The end on the first lap if it lies ahead of the start in walk order.
             let ahead = if level.ccw {
                 Ordering::Greater
@@ -2102,17 +2206,20 @@ impl<S: Storage> Tree<'_, '_, S> {
             };
             Events::new(walker, false)
         };
-        sc.frames.push(Frame::Walk(RangeWalk {
+        sc.push(
             level,
-            events: walk.map(walker),
-            seen: self.complex.ceiling(start),
-            cur_from: from.clone(),
-            from,
-            to,
-            cur_boundary: first,
-            past_from: false,
-            done: false,
-        }))
+            Frame::Walk(RangeWalk {
+                level,
+                events: walk.map(walker),
+                seen: self.complex.ceiling(start),
+                cur_from: from.clone(),
+                from: from.clone(),
+                to: to.clone(),
+                cur_boundary: first,
+                past_from: false,
+                done: false,
+            }),
+        )
     }
 }
 
@@ -2126,9 +2233,10 @@ impl RangeWalk {
         exacts: &[(Wide, Wide)],
         stage: usize,
         level: usize,
-    ) -> Result<Option<Piece>, WalkError> {
+        out: &mut Piece,
+    ) -> Result<bool, WalkError> {
         if self.done {
-            return Ok(None);
+            return Ok(false);
         }
         let (eye, ccw) = (self.level.eye, self.level.ccw);
         let mut end = None;
@@ -2160,26 +2268,24 @@ impl RangeWalk {
                         self.cur_from = Dir::of(&c.last);
                     }
                 } else if after != self.seen {
-                    let d = Dir::of(&c.first);
-                    let boundary = tree.event_boundary(stage, level, eye, &d);
-                    let piece = Piece {
-                        from: core::mem::replace(&mut self.cur_from, Dir::of(&c.last)),
-                        to: d,
-                        ceiling: self.seen,
-                        boundary: core::mem::replace(&mut self.cur_boundary, boundary),
-                    };
+                    out.from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
+                    out.to = Dir::of(&c.first);
+                    out.ceiling = self.seen;
+                    out.boundary = core::mem::replace(
+                        &mut self.cur_boundary,
+                        tree.event_boundary(stage, level, eye, &out.to),
+                    );
                     self.seen = after;
-                    return Ok(Some(piece));
+                    return Ok(true);
                 }
             }
         }
         self.done = true;
-        Ok(Some(Piece {
-            from: self.cur_from.clone(),
-            to: end.unwrap_or_else(|| self.to.clone()),
-            ceiling: self.seen,
-            boundary: self.cur_boundary,
-        }))
+        out.from = self.cur_from.clone();
+        out.to = end.unwrap_or_else(|| self.to.clone());
+        out.ceiling = self.seen;
+        out.boundary = self.cur_boundary;
+        Ok(true)
     }
 }
 
@@ -2372,10 +2478,38 @@ impl<S: Storage> Tree<'_, '_, S> {
         Ok((a, b))
     }
 
-    /// Continues the edge piece `(from, to)` (in the split frame's direction) of the split
-    /// of `m` seen from `level`'s eye across the edge `(ia, ib)`: the virtual eye beyond it,
-    /// the hop on the stack and the frame that walks on (for an entry edge, the split by
-    /// the exit edges).
+    /// Splits the piece `p` seen from `level` by the edges of `m` and continues its first
+    /// edge piece (written over `p`). The split frame is pushed only if more may follow: a
+    /// split done with its first piece leaves its place to that piece's frame (the usual
+    /// mirror piece lies on one edge; a frame is large, and every push a copy).
+    fn split<F: Frames>(
+        &self,
+        sc: &mut Stacks<F>,
+        level: Level,
+        m: ObjectId,
+        kind: SplitKind,
+        p: &mut Piece,
+    ) -> Result<(), WalkError> {
+        // The split's place, as if pushed.
+        sc.room(1 + level.held)?;
+        let mut s = Split::new(level, m, kind, p);
+        let (stage, index) = (sc.hops.len(), sc.branch.len());
+        let Some(e) = s.next_edge(self, sc.exacts.flat(), stage, index, p) else {
+            sc.restore(level);
+            return Ok(());
+        };
+        let left = s.done;
+        if !left {
+            sc.push(level, Frame::Split(s))?;
+        }
+        self.change_eye(sc, level, m, kind, p, e, left)
+    }
+
+    /// Continues the edge piece `p` (its range in the split frame's direction and its first
+    /// boundary) of the split of `m` seen from `level`'s eye across the edge `(ia, ib)`: the
+    /// virtual eye beyond it, the hop on the stack and the frame that walks on (for an entry
+    /// edge, the split by the exit edges). `left`: the split (of `level`) is not on the
+    /// stack, done with this piece; the frame holds its place and restores its stacks.
     #[allow(clippy::too_many_arguments)]
     fn change_eye<F: Frames>(
         &self,
@@ -2383,9 +2517,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         level: Level,
         m: ObjectId,
         kind: SplitKind,
-        (from, to): (Dir, Dir),
-        first: Boundary,
+        p: &Piece,
         (ia, ib): (usize, usize),
+        left: bool,
     ) -> Result<(), WalkError> {
         let eye = level.eye;
         let index = sc.branch.len();
@@ -2415,33 +2549,46 @@ impl<S: Storage> Tree<'_, '_, S> {
         };
         // Mapped in counter-clockwise order, then back to walk order; mirrors flip it.
         let (lo, hi) = if level.ccw {
-            (&from, &to)
+            (&p.from, &p.to)
         } else {
-            (&to, &from)
+            (&p.to, &p.from)
         };
-        let here = Level {
-            eye: eye2,
-            ccw: level.ccw != flip,
-            hops: sc.hops.len(),
-            branch: sc.branch.len(),
-            exacts: sc.exacts.entries().len(),
-            ..level
+        let here = if left {
+            Level {
+                eye: eye2,
+                ccw: level.ccw != flip,
+                held: level.held + 1,
+                ..level
+            }
+        } else {
+            Level {
+                eye: eye2,
+                ccw: level.ccw != flip,
+                hops: sc.hops.len(),
+                branch: sc.branch.len(),
+                exacts: sc.exacts.entries().len(),
+                held: 0,
+                ..level
+            }
         };
         let (x, y) = self.map_range(&mut sc.exacts, lo, hi, &hop, flip)?;
         let (from, to) = if here.ccw { (x, y) } else { (y, x) };
         sc.hops.push(hop).map_err(|_| WalkError::TreeTooDeep)?;
         match kind {
             #[cfg(feature = "refraction")]
-            SplitKind::Entry(eta) => sc.frames.push(Frame::Split(Split {
-                level: here,
-                m,
-                kind: SplitKind::Exit(eta),
-                from,
-                to,
-                first,
-                last: None,
-                done: false,
-            })),
+            SplitKind::Entry(eta) => sc.push(
+                here,
+                Frame::Split(Split {
+                    level: here,
+                    m,
+                    kind: SplitKind::Exit(eta),
+                    from,
+                    to,
+                    first: p.boundary,
+                    last: None,
+                    done: false,
+                }),
+            ),
             _ => {
                 sc.branch.push(m).map_err(|_| WalkError::TreeTooDeep)?;
                 let deeper = Level {
@@ -2451,7 +2598,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 // Behind a refractive object's exit edge, neighbouring pieces' walks
                 // mostly start in one cylinder: a hint pays there (not behind mirrors).
                 let hint = !flip;
-                self.push_range_walk(sc, deeper, m, (from, to), first, hint)
+                self.push_range_walk(sc, deeper, m, (&from, &to), p.boundary, hint)
             }
         }
     }
@@ -2545,29 +2692,30 @@ impl SplitKind {
 
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl Split {
-    fn new(level: Level, m: ObjectId, kind: SplitKind, p: Piece) -> Split {
+    fn new(level: Level, m: ObjectId, kind: SplitKind, p: &Piece) -> Split {
         Split {
             level,
             m,
             kind,
-            from: p.from,
-            to: p.to,
+            from: p.from.clone(),
+            to: p.to.clone(),
             first: p.boundary,
             last: None,
             done: false,
         }
     }
 
-    /// The next edge piece in the frame's direction: its range in walk order, its first
-    /// boundary and its edge. The nonempty pieces are disjoint, so each is the one whose
-    /// start comes first after the last one's.
+    /// The next edge piece in the frame's direction: its edge, with its range in walk order
+    /// and its first boundary written to `out` (its ceiling is left as it is). The nonempty
+    /// pieces are disjoint, so each is the one whose start comes first after the last one's.
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         exacts: &[(Wide, Wide)],
         stage: usize,
         level: usize,
-    ) -> Option<(Dir, Dir, Boundary, (usize, usize))> {
+        out: &mut Piece,
+    ) -> Option<(usize, usize)> {
         if self.done {
             return None;
         }
@@ -2584,7 +2732,10 @@ impl Split {
         if cross(lv, hv) == 0 {
             self.done = true;
             let e = tree.split_collapsed(eye, self.m, hi, front)?;
-            return Some((self.from.clone(), self.to.clone(), self.first, e));
+            out.from = self.from.clone();
+            out.to = self.to.clone();
+            out.boundary = self.first;
+            return Some(e);
         }
         // In walk order: `a` before `b`.
         let before = |a: (i128, i128), b: (i128, i128)| {
@@ -2659,14 +2810,14 @@ impl Split {
             return None;
         };
         self.last = Some((key, k));
-        let (ws, boundary) = match start {
+        (out.from, out.boundary) = match start {
             Some(v) => (
                 tree.toward(eye, v),
                 tree.split_boundary(stage, level, eye, v),
             ),
             None => (self.from.clone(), self.first),
         };
-        let we = match end {
+        out.to = match end {
             Some(v) => tree.toward(eye, v),
             // The piece reaches the end of the range: the facing edges' pieces are disjoint,
             // so no later one is nonempty.
@@ -2675,7 +2826,7 @@ impl Split {
                 self.to.clone()
             }
         };
-        Some((ws, we, boundary, edge))
+        Some(edge)
     }
 }
 
