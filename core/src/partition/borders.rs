@@ -885,6 +885,26 @@ impl<S: Storage> super::Complex<S> {
         self.across_keyed(scene, chain, side, layer, &angle.keyed())
     }
 
+    /// `angle` against the wall `w`: `Greater` past it (θ = 0 lies before all), the wall's
+    /// angle read by reference from `borders` where stored. Always inlined: a tiling search
+    /// compares at every step.
+    #[inline(always)]
+    fn cmp_wall(
+        &self,
+        borders: &BordersRef<'_>,
+        scene: &SceneRef<'_>,
+        w: Wall,
+        angle: &KeyedAngle,
+    ) -> Option<Ordering> {
+        match w {
+            Wall::Zero => Some(Ordering::Greater),
+            Wall::Vertex(v) => match borders.angle(v.index()) {
+                Some(a) => Some(angle.cmp_angle(a)),
+                None => Some(angle.cmp_angle(&self.wall_angle(scene, w)?)),
+            },
+        }
+    }
+
     /// [`Complex::across`] with the angle's comparison key computed once and the walls'
     /// stored angles read by reference (an anchored walk's start climbs from here).
     pub(crate) fn across_keyed(
@@ -897,24 +917,28 @@ impl<S: Storage> super::Complex<S> {
     ) -> Option<CylinderId> {
         let borders = self.borders_ref();
         let list = borders.tiling(chain, side, layer)?;
-        // `angle` against the wall `w`: `Greater` past it (θ = 0 lies before all).
-        let cmp = |w: Wall| match w {
-            Wall::Zero => Some(Ordering::Greater),
-            Wall::Vertex(v) => match borders.angle(v.index()) {
-                Some(a) => Some(angle.cmp_angle(a)),
-                None => Some(angle.cmp_angle(&self.wall_angle(scene, w)?)),
-            },
-        };
-        let k = list.partition_point(|&id| {
-            self.cylinder(id)
-                .and_then(|c| cmp(c.left))
-                .is_some_and(|o| o == Ordering::Greater)
-        });
+        let cylinders = self.cylinders();
+        // The number of cylinders whose left wall `angle` is past (a prefix: the tiling is
+        // sorted by θ), by bisection; `len` at least halves per round.
+        let (mut k, mut len) = (0, list.len());
+        while len > 0 {
+            let half = len / 2;
+            let past = match list.get(k + half).and_then(|id| cylinders.get(id.index())) {
+                Some(c) => self.cmp_wall(&borders, scene, c.left, angle) == Some(Ordering::Greater),
+                None => false,
+            };
+            if past {
+                k += half + 1;
+                len -= half + 1;
+            } else {
+                len = half;
+            }
+        }
         let id = *list.get(k.checked_sub(1)?)?;
-        let c = self.cylinder(id)?;
+        let c = cylinders.get(id.index())?;
         let inside = match c.right {
             Wall::Zero => true,
-            w => cmp(w).is_some_and(|o| o == Ordering::Less),
+            w => self.cmp_wall(&borders, scene, w, angle) == Some(Ordering::Less),
         };
         inside.then_some(id)
     }

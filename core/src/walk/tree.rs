@@ -1820,13 +1820,17 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// Whether a vertex of `object` lies exactly on the line through `eye` with the
-    /// direction of `a`. Bit budget: |a| ≤ 2⁶³, |v − eye| ≤ 2⁵⁴: products < 2¹¹⁸.
+    /// direction of `a` (read only where the bounding box meets the line).
     fn vertex_on_line(&self, eye: QueryPoint, a: &Angle, object: ObjectId) -> bool {
-        let d = a.vector();
-        self.scene.object(object).is_some_and(|o| {
-            (o.first_vertex()..o.first_vertex() + o.len())
-                .any(|v| cross_q(d, self.qpoint(v), eye) == 0)
-        })
+        let (Some(o), Some(d)) = (self.scene.object(object), a.vector64()) else {
+            return false;
+        };
+        box_side(d, o, eye) == Sign::Zero
+            && self
+                .scene
+                .polygon(o)
+                .iter()
+                .any(|&p| line_cross(d, p, eye) == 0)
     }
 
     /// Side of the line through `v` against the line through `eye`, both of direction `d`
@@ -1852,21 +1856,26 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// [`Tree::side_after`]): the lower chain is the lowest vertex line of its object, so
     /// it lies below iff some vertex line does; the upper chain is the highest.
     fn chain_after(&self, eye: QueryPoint, from: &Angle, chain: Chain, ccw: bool) -> Sign {
-        let Some(obj) = self.scene.object(chain.object) else {
+        let (Some(obj), Some(d)) = (self.scene.object(chain.object), from.vector64()) else {
             return Sign::Zero;
         };
-        let (first, n) = (obj.first_vertex(), obj.len());
+        let first = obj.first_vertex();
         let (some, none) = match chain.bound {
             Bound::Lower => (Sign::Negative, Sign::Positive),
             Bound::Upper => (Sign::Positive, Sign::Negative),
         };
+        // An object whose bounding box lies on one side of the line lies there whole.
+        match box_side(d, obj, eye) {
+            Sign::Zero => {}
+            s => return s,
+        }
         // A vertex exactly on the line takes the full rule.
-        let d = from.vector();
-        let side = |v: usize| match Sign::of_i128(cross_q(d, self.qpoint(v), eye)) {
-            Sign::Zero => self.side_after(eye, from, v, ccw),
+        let side = |k: usize, p: Point| match Sign::of_i128(line_cross(d, p, eye)) {
+            Sign::Zero => self.side_after(eye, from, first + k, ccw),
             s => s,
         };
-        if (first..first + n).any(|v| side(v) == some) {
+        let vertices = self.scene.polygon(obj).iter();
+        if vertices.enumerate().any(|(k, &p)| side(k, p) == some) {
             some
         } else {
             none
@@ -1940,7 +1949,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // θ = 0 the turned line lies just below 2π: the walk starts at the top (`None`),
         // and the tangents exactly at θ = 0 just below 2π are behind it, the others ahead.
         let mut theta = match (ccw, zero) {
-            (true, _) if wraps(angle) => Some(Angle::ZERO),
+            (true, true) if wraps(angle) => Some(Angle::ZERO),
             (false, true) => None,
             _ => Some(*angle),
         };
@@ -1990,34 +1999,56 @@ impl<S: Storage> Tree<'_, '_, S> {
                 .find(|(k, _)| *k == ch)
                 .map_or_else(|| self.chain_after(eye, from, ch, ccw), |&(_, s)| s)
         };
-        let top = !ccw && from.is_exactly_zero();
-        let cmp_wall = |a: &Angle| {
-            if wraps(a) {
-                Ordering::Greater
-            } else if top {
-                Ordering::Less
-            } else {
-                a.cmp_exact(from)
-            }
-        };
-        let wall = |w: Wall, left: bool| match self.complex.wall_angle(self.scene, w) {
-            None => true,
-            // Turned counter-clockwise, walls exactly at the angle are behind; clockwise,
-            // ahead.
-            Some(a) if left && ccw => cmp_wall(&a) != Ordering::Greater,
-            Some(a) if left => cmp_wall(&a) == Ordering::Less,
-            Some(a) if ccw => cmp_wall(&a) == Ordering::Greater,
-            Some(a) => cmp_wall(&a) != Ordering::Less,
-        };
-        wall(c.left, true)
-            && wall(c.right, false)
+        self.wall_after(from, c.left, true, ccw)
+            && self.wall_after(from, c.right, false, ccw)
             && c.bottom.is_none_or(|b| chain_side(b) == Sign::Negative)
             && c.top.is_none_or(|t| chain_side(t) == Sign::Positive)
+    }
+
+    /// Whether the line through the eye just after `from` (`ccw`, else just before it)
+    /// lies on the inner side of the wall `w` of a cylinder, its `left` wall or its right
+    /// one (see [`Tree::contains_after`]). `wraps` only for a wall exactly at θ = 0 (it is
+    /// out of line).
+    #[inline]
+    fn wall_after(&self, from: &Angle, w: Wall, left: bool, ccw: bool) -> bool {
+        let borders = self.complex.borders_ref();
+        let computed;
+        let a = match w {
+            Wall::Zero => return true,
+            Wall::Vertex(v) => match borders.angle(v.index()) {
+                Some(a) => a,
+                None => match self.complex.wall_angle(self.scene, w) {
+                    Some(a) => {
+                        computed = a;
+                        &computed
+                    }
+                    None => return true,
+                },
+            },
+        };
+        // A wall exactly at θ = 0 that the perturbation puts just below 2π counts as 2π,
+        // and the line just before exactly θ = 0 lies below 2π, after every other wall.
+        let o = if a.is_exactly_zero() && wraps(a) {
+            Ordering::Greater
+        } else if !ccw && from.is_exactly_zero() {
+            Ordering::Less
+        } else {
+            a.cmp_exact(from)
+        };
+        // Turned counter-clockwise, walls exactly at the angle are behind; clockwise, ahead.
+        match (left, ccw) {
+            (true, true) => o != Ordering::Greater,
+            (true, false) => o == Ordering::Less,
+            (false, true) => o == Ordering::Greater,
+            (false, false) => o != Ordering::Less,
+        }
     }
 
     /// The start cylinder found through the per-chain tilings: the cylinders with floor `m`
     /// at `from` (perturbed) stack up from `m`'s lower chain to its upper one; climb from
     /// the nearer end until the next chain lies beyond the eye's line. O(log n) per tiling lookup plus the height of the stack.
+    /// The climb proves the chains' sides and the perturbed θ-range: of
+    /// [`Tree::contains_after`] only the wall the turned line leaves behind is left to test.
     /// `None` where something lies exactly on the opening ray and the perturbed angle and
     /// the turned line disagree (the caller then scans).
     fn stack_floor(
@@ -2028,17 +2059,36 @@ impl<S: Storage> Tree<'_, '_, S> {
         ccw: bool,
     ) -> Option<CylinderId> {
         // Climb from the end of `m`'s sheet nearer to the eye's line (either climb is
-        // exact); that end's vertex line off the eye's line is the side of its chain.
+        // exact); that end's vertex line off the eye's line is the side of its chain, and
+        // so is the far end's for `m`'s other chain.
         let (lo, hi) = self.extremes(eye, m, from)?;
         let up = -lo <= hi;
-        let (start, side, inward, end) = if up {
-            (Bound::Lower, Side::Above, Sign::Negative, lo)
+        let (start, far, side, inward, end, far_end) = if up {
+            (
+                Bound::Lower,
+                Bound::Upper,
+                Side::Above,
+                Sign::Negative,
+                lo,
+                hi,
+            )
         } else {
-            (Bound::Upper, Side::Below, Sign::Positive, hi)
+            (
+                Bound::Upper,
+                Bound::Lower,
+                Side::Below,
+                Sign::Positive,
+                hi,
+                lo,
+            )
         };
         let first = Chain {
             object: m,
             bound: start,
+        };
+        let last = Chain {
+            object: m,
+            bound: far,
         };
         let first_side = match Sign::of_i128(end) {
             Sign::Zero => self.chain_after(eye, from, first, ccw),
@@ -2048,10 +2098,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             return None;
         }
         // The tilings are searched at the perturbed angle, on the turned line's lap (none
-        // holds the top of the circle: the caller scans).
+        // holds the top of the circle: the caller scans). `wraps` only where exactly at
+        // θ = 0 (it is out of line).
         let zero = from.is_exactly_zero();
         let probe = match (ccw, zero) {
-            (true, _) if wraps(from) => Angle::ZERO,
+            (true, true) if wraps(from) => Angle::ZERO,
             (false, true) => return None,
             _ => *from,
         };
@@ -2059,31 +2110,45 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut id = self
             .complex
             .across_keyed(self.scene, first, side, Layer::After, &key)?;
-        // The last chain crossed, on the eye's side of the line (for `contains_after`).
+        // The last chain crossed, on the eye's side of the line.
         let mut crossed = (first, inward);
         for _ in 0..self.complex.cylinders().len() {
             let c = self.complex.cylinder(id)?;
             if c.floor != Some(m) {
                 return None;
             }
-            let (next, next_side) = match if up { c.top } else { c.bottom } {
-                Some(t) => match self.arc_after(eye, from, (id, t, up), ccw) {
-                    s if s != inward.flip() => (t, s),
-                    s => {
-                        let known = [crossed, (t, s)];
-                        return self.contains_after(eye, from, c, ccw, &known).then_some(id);
-                    }
-                },
-                None => {
-                    return self
-                        .contains_after(eye, from, c, ccw, &[crossed])
-                        .then_some(id)
-                }
+            let (near, next) = if up {
+                (c.bottom, c.top)
+            } else {
+                (c.top, c.bottom)
             };
-            crossed = (next, next_side);
+            let next_side = match next {
+                Some(t) if t == last && far_end != 0 => Some((t, Sign::of_i128(far_end))),
+                Some(t) => Some((t, self.arc_after(eye, from, (id, t, up), ccw))),
+                None => None,
+            };
+            match next_side {
+                Some((t, s)) if s != inward.flip() => crossed = (t, s),
+                _ => {
+                    // Every cylinder of the climb holds the probe strictly inside its
+                    // θ-range (the tilings are searched and scanned at it), so only a wall
+                    // exactly at `from` that the turned line leaves behind can exclude it,
+                    // and the chains crossed are its arcs.
+                    if near == Some(crossed.0) && crossed.1 == inward {
+                        let (w, left) = if ccw {
+                            (c.right, false)
+                        } else {
+                            (c.left, true)
+                        };
+                        return self.wall_after(from, w, left, ccw).then_some(id);
+                    }
+                    let known = [crossed, next_side.unwrap_or(crossed)];
+                    return self.contains_after(eye, from, c, ccw, &known).then_some(id);
+                }
+            }
             // Beyond a chain whose object lies on the far side (above a lower chain, below
             // an upper one) that object is crossed: the layer ending there.
-            let layer = if next.bound == start {
+            let layer = if crossed.0.bound == start {
                 Layer::Before
             } else {
                 Layer::Around
@@ -2099,17 +2164,15 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     /// The least and greatest `cross(d, v − eye)` over the vertices `v` of `m`, `d` the
     /// direction of `from`: the lines of `m`'s lower and upper chains against the eye's
-    /// line (`None`: no such object). Bit budget as [`cross_q`].
+    /// line (`None`: no such object). Bit budget as [`line_cross`].
     fn extremes(&self, eye: QueryPoint, m: ObjectId, from: &Angle) -> Option<(i128, i128)> {
-        let d = from.vector();
-        let obj = self.scene.object(m)?;
-        let first = obj.first_vertex();
-        (first..first + obj.len())
-            .map(|v| cross_q(d, self.qpoint(v), eye))
-            .fold(None, |acc, c| match acc {
-                None => Some((c, c)),
-                Some((lo, hi)) => Some((c.min(lo), c.max(hi))),
-            })
+        let d = from.vector64()?;
+        let (first, rest) = self.scene.polygon(self.scene.object(m)?).split_first()?;
+        let c = line_cross(d, *first, eye);
+        Some(rest.iter().fold((c, c), |(lo, hi), &p| {
+            let c = line_cross(d, p, eye);
+            (c.min(lo), c.max(hi))
+        }))
     }
 
     /// [`Tree::stack_floor`] by a scan over the cylinders: O(cylinders), for the
@@ -2128,6 +2191,49 @@ impl<S: Storage> Tree<'_, '_, S> {
             .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw, &[]))
             .and_then(|(i, _)| CylinderId::from_index(i))
             .ok_or(WalkError::NoStart)
+    }
+}
+
+/// `cross(d, p − eye)` for a vertex `p` and the direction `d` of an [`Angle`] (kept in
+/// `i64`): single widening products. Bit budget: `|d| ≤ 2⁶³`, `|p − eye| ≤ 2⁵⁴` (query
+/// grid), products `< 2¹¹⁷`, exact in `i128`.
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+#[inline(always)]
+fn line_cross(d: (i64, i64), p: Point, eye: QueryPoint) -> i128 {
+    let p = p.to_query();
+    offset_cross(d, p.x() - eye.x(), p.y() - eye.y())
+}
+
+/// `cross(d, (wx, wy))`, bit budget as [`line_cross`].
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+#[inline(always)]
+fn offset_cross(d: (i64, i64), wx: i64, wy: i64) -> i128 {
+    i128::from(d.0) * i128::from(wy) - i128::from(d.1) * i128::from(wx)
+}
+
+/// The side of the line through `eye` with direction `d` on which the bounding box of `o`
+/// lies whole (`Zero`: the box meets the line), from the two corners where
+/// [`line_cross`] (linear in the point) is least and greatest. Bit budget as
+/// [`line_cross`].
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+#[inline]
+fn box_side(d: (i64, i64), o: &crate::scene::Object, eye: QueryPoint) -> Sign {
+    let (lo, hi) = o.bbox();
+    let (lo, hi) = (lo.to_query(), hi.to_query());
+    let (lo, hi) = (
+        (lo.x() - eye.x(), lo.y() - eye.y()),
+        (hi.x() - eye.x(), hi.y() - eye.y()),
+    );
+    // `dx·wy − dy·wx`: least at the lowest `wy` where `dx > 0` and at the greatest `wx`
+    // where `dy > 0`.
+    let (x_least, x_most) = if d.1 > 0 { (hi.0, lo.0) } else { (lo.0, hi.0) };
+    let (y_least, y_most) = if d.0 > 0 { (lo.1, hi.1) } else { (hi.1, lo.1) };
+    if offset_cross(d, x_least, y_least) > 0 {
+        Sign::Positive
+    } else if offset_cross(d, x_most, y_most) < 0 {
+        Sign::Negative
+    } else {
+        Sign::Zero
     }
 }
 
@@ -3318,6 +3424,97 @@ mod tests {
             fallbacks * 4 < routes.iter().sum::<usize>(),
             "{fallbacks} {routes:?}"
         );
+    }
+
+    /// The start cylinder the climb of a floor's sheet finds (`Tree::stack_floor`: chain
+    /// sides by bounding box, arc vertex or the floor's extremes, one wall tested) is the
+    /// one the scan with the full containment test finds, for eyes on the lines of walls
+    /// (openings exactly at a wall's angle, through one of its vertices) and elsewhere; and
+    /// a chain's side (`Tree::chain_after`) is the side of its extreme vertex line.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    #[test]
+    fn stack_floor_is_the_scans() {
+        use super::{ranked, Bound, Chain, Tree};
+        use crate::geom::sos::Angle;
+        use crate::geom::Sign;
+        use crate::partition::Wall;
+        use crate::scene::ObjectId;
+        use core::cmp::Ordering;
+        let tri = |x: i32, y: i32| {
+            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
+            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
+        };
+        let objects = [
+            rect(-9, -2, -7, 3),
+            tri(2, 5),
+            rect(4, -6, 9, -5),
+            tri(-5, -9),
+            rect(6, 1, 7, 8),
+        ];
+        let s = Scene::new(objects.iter().map(|p| (Material::Opaque, p.as_slice()))).unwrap();
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
+        let tree = Tree {
+            complex: &c,
+            scene: &s,
+        };
+        let mut next = uniform(5);
+        let (mut climbed, mut at_wall) = (0, 0);
+        for v in c.vertices() {
+            let b = v.bitangent;
+            let (p, r) = (tree.qpoint(b.first), tree.qpoint(b.second));
+            for k in 0..6 {
+                // On the wall's line beyond either tangent point, or anywhere.
+                let q = if k < 4 {
+                    let t = [-2, -1, 2, 3][k];
+                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()))
+                } else {
+                    QueryPoint::from_f64(
+                        next(2400) as f64 / 100.0 - 12.0,
+                        next(2400) as f64 / 100.0 - 12.0,
+                    )
+                    .ok()
+                };
+                let Some(q) = q else { continue };
+                for h in [b.first, b.second] {
+                    let a = Angle::from_query(q, ranked(&s, h));
+                    for (m, ccw) in (0..objects.len() as u32).flat_map(|m| [(m, true), (m, false)])
+                    {
+                        let m = ObjectId(m);
+                        for bound in [Bound::Lower, Bound::Upper] {
+                            // The reference: some vertex on the chain's side by the full rule.
+                            let o = s.object(m).unwrap();
+                            let some = if bound == Bound::Lower {
+                                Sign::Negative
+                            } else {
+                                Sign::Positive
+                            };
+                            let any = (o.first_vertex()..o.first_vertex() + o.len()).any(|v| {
+                                match super::cross_q(a.vector(), tree.qpoint(v), q) {
+                                    0 => tree.side_after(q, &a, v, ccw) == some,
+                                    x => Sign::of_i128(x) == some,
+                                }
+                            });
+                            let chain = Chain { object: m, bound };
+                            let side = tree.chain_after(q, &a, chain, ccw);
+                            assert_eq!(side == some, any, "{q:?} {a:?} {chain:?}");
+                        }
+                        let Some(id) = tree.stack_floor(q, m, &a, ccw) else {
+                            continue;
+                        };
+                        assert_eq!(tree.scan_floor(q, m, &a, ccw).ok(), Some(id), "{q:?} {a:?}");
+                        climbed += 1;
+                        let cyl = c.cylinder(id).unwrap();
+                        let on = |w: Wall| {
+                            c.wall_angle(&s, w)
+                                .is_some_and(|w| w.cmp_exact(&a) == Ordering::Equal)
+                        };
+                        at_wall += usize::from(on(cyl.left) || on(cyl.right));
+                    }
+                }
+            }
+        }
+        assert!(climbed > 1000 && at_wall > 100, "{climbed} {at_wall}");
     }
 
     /// The side of a cylinder's arc taken at its arc vertex (`Tree::arc_after`) is the
