@@ -648,8 +648,12 @@ fn merge<I: Interval, O: Cover>(camera: &Camera, intervals: &[I], out: &mut O) {
                 if col + 1 < w && bound.side(&b) != Ordering::Greater {
                     piece(out, col, cur, (a.x, b.x), x, f64::INFINITY);
                     let next;
-                    // The column of `bx` (`as` saturates, and takes NaN to 0).
-                    let guess = ((bound.x(camera) + camera.tan_half) * per_x) as usize;
+                    // The column of `bx`: its floor (rounding `v − 0.5`; an integer `v`
+                    // may go one down), clamped. A guess only, confirmed exactly by
+                    // `place`: any value is safe (NaN gives some integer), and the
+                    // rounding is cheaper than the saturating `as usize`.
+                    let v = (bound.x(camera) + camera.tan_half) * per_x;
+                    let guess = round_small_i64(v - 0.5).clamp(0, w as i64) as usize;
                     (next, a, b) = camera.place(&bound, guess, col + 1, b);
                     if next > col + 1 {
                         out.whole(col + 1..next, cur);
@@ -1000,6 +1004,9 @@ impl<I: Interval> Fill<'_, I> {
 impl<I: Interval> Cover for Fill<'_, I> {
     const PIECES: bool = false;
 
+    // Inlined (into `piece`, two calls per boundary): a call's saving and restoring of
+    // registers costs about as much as the few objects it copies.
+    #[inline(always)]
     fn piece(&mut self, p: Piece) {
         self.end_columns(p.column);
         let branch = self
