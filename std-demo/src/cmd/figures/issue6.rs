@@ -10,8 +10,8 @@ use vcx_demo::generate::{generate, SceneKind};
 use vcx_demo::stress::{Family, SCALES};
 
 use super::{
-    bench_error, internal, markdown_table, ratio_text, series, stability, thousands, Failure,
-    Output, Plot, Progress, Sizes, Table, Target, SEED,
+    bench_error, internal, markdown_table, series, stability, thousands, Failure, Output, Plot,
+    Progress, Sizes, Table, Target, SEED,
 };
 
 /// The scenes of `vcx bench error` in BENCHMARKS.md: `std-demo/scenes/hall.json` and
@@ -24,10 +24,13 @@ fn percent(v: f64) -> String {
     format!("{:.3} %", 100.0 * v)
 }
 
-/// A ratio with three significant digits or so: `0.0123×`, `1.14×`, `69×`.
+/// A ratio with three significant digits or so: `0.0123×`, `1.14×`, `19.7×`, `130×` (a
+/// ratio just short of a target must not read as the target).
 fn ratio(x: f64) -> String {
-    if x >= 10.0 {
+    if x >= 100.0 {
         format!("{x:.0}×")
+    } else if x >= 10.0 {
+        format!("{x:.1}×")
     } else if x >= 1.0 {
         format!("{x:.2}×")
     } else {
@@ -141,7 +144,7 @@ pub(super) fn fig_error(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> 
             });
         let (measured, met) = match better(0) {
             Some((x, lower)) => (
-                format!("{}{}×", if lower { "≥ " } else { "" }, ratio_text(x)),
+                format!("{}{}", if lower { "≥ " } else { "" }, ratio(x)),
                 if x >= SPEEDUP {
                     Some(true)
                 } else if lower {
