@@ -3215,7 +3215,7 @@ mod tests {
     }
 
     /// A xorshift generator of integers uniform in `-m..=m`.
-    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     fn uniform(mut seed: u64) -> impl FnMut(i64) -> i64 {
         move |m| {
             seed ^= seed << 13;
@@ -3473,6 +3473,28 @@ mod tests {
         );
     }
 
+    /// Three boxes and two triangles around the origin, and their complex with its arc
+    /// vertices: the scene of the anchored-start tests.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    fn anchored() -> (Scene, crate::partition::Complex) {
+        let tri = |x: i32, y: i32| {
+            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
+            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
+        };
+        let objects = [
+            rect(-9, -2, -7, 3),
+            tri(2, 5),
+            rect(4, -6, 9, -5),
+            tri(-5, -9),
+            rect(6, 1, 7, 8),
+        ];
+        let s = Scene::new(objects.iter().map(|p| (Material::Opaque, p.as_slice()))).unwrap();
+        let c = build_by_sweep(&s.as_ref())
+            .unwrap()
+            .with_arc_vertices(&s.as_ref());
+        (s, c)
+    }
+
     /// The start cylinder the climb of a floor's sheet finds (`Tree::stack_floor`: chain
     /// sides by bounding box, arc vertex or the floor's extremes, one wall tested) is the
     /// one the scan with the full containment test finds, for eyes on the lines of walls
@@ -3487,20 +3509,8 @@ mod tests {
         use crate::partition::Wall;
         use crate::scene::ObjectId;
         use core::cmp::Ordering;
-        let tri = |x: i32, y: i32| {
-            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
-            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
-        };
-        let objects = [
-            rect(-9, -2, -7, 3),
-            tri(2, 5),
-            rect(4, -6, 9, -5),
-            tri(-5, -9),
-            rect(6, 1, 7, 8),
-        ];
-        let s = Scene::new(objects.iter().map(|p| (Material::Opaque, p.as_slice()))).unwrap();
+        let (s, c) = anchored();
         let s = s.as_ref();
-        let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
         let tree = Tree {
             complex: &c,
             scene: &s,
@@ -3525,8 +3535,7 @@ mod tests {
                 let Some(q) = q else { continue };
                 for h in [b.first, b.second] {
                     let a = Angle::from_query(q, ranked(&s, h));
-                    for (m, ccw) in (0..objects.len() as u32).flat_map(|m| [(m, true), (m, false)])
-                    {
+                    for (m, ccw) in (0..s.len() as u32).flat_map(|m| [(m, true), (m, false)]) {
                         let m = ObjectId(m);
                         for bound in [Bound::Lower, Bound::Upper] {
                             // The reference: some vertex on the chain's side by the full rule.
@@ -3574,20 +3583,8 @@ mod tests {
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
         use crate::partition::{CylinderId, Wall, NO_ARC_VERTEX};
-        let tri = |x: i32, y: i32| {
-            let p = |x: i32, y: i32| Point::from_raw(x << 16, y << 16).unwrap();
-            alloc::vec![p(x, y), p(x + 3, y + 1), p(x + 1, y + 4)]
-        };
-        let objects = [
-            rect(-9, -2, -7, 3),
-            tri(2, 5),
-            rect(4, -6, 9, -5),
-            tri(-5, -9),
-            rect(6, 1, 7, 8),
-        ];
-        let s = Scene::new(objects.iter().map(|p| (Material::Opaque, p.as_slice()))).unwrap();
+        let (s, c) = anchored();
         let s = s.as_ref();
-        let c = build_by_sweep(&s).unwrap().with_arc_vertices(&s);
         let tree = Tree {
             complex: &c,
             scene: &s,
