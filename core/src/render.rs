@@ -1793,30 +1793,13 @@ fn unit(v: (f64, f64)) -> Option<(f64, f64)> {
 mod tests {
     use super::round_small_i64;
     #[cfg(feature = "alloc")]
-    use super::{coverage, Angle, Camera, CoverageTable, Direction, Interval, ObjectId};
+    use super::{coverage, Angle, Camera, CoverageTable, Direction, ObjectId};
     #[cfg(feature = "alloc")]
     use alloc::vec::Vec;
 
-    /// An interval with an exact start or one known in `f64` only.
+    /// Intervals with an exact start or one known in `f64` only.
     #[cfg(feature = "alloc")]
-    struct Iv {
-        exact: Option<Angle>,
-        start: f64,
-        branch: Vec<ObjectId>,
-    }
-
-    #[cfg(feature = "alloc")]
-    impl Interval for Iv {
-        fn exact_start(&self) -> Option<Angle> {
-            self.exact
-        }
-        fn start_radians(&self) -> f64 {
-            self.start
-        }
-        fn branch(&self) -> &[ObjectId] {
-            &self.branch
-        }
-    }
+    use crate::walk::TreeInterval as Iv;
 
     /// The table from every piece of [`coverage`], each through `push`: the column by
     /// column merge, every column edge computed.
@@ -1891,9 +1874,10 @@ mod tests {
                 let exact = (next() % 3 != 0).then_some(a);
                 let branch = branches[(next() % 4) as usize];
                 ivs.push(Iv {
-                    exact,
+                    exact_start: exact,
                     start: a.radians(),
                     branch: branch.iter().map(|&o| ObjectId(o)).collect(),
+                    start_vertex: None,
                 });
             }
             ivs.sort_by(|a, b| a.start.total_cmp(&b.start));
@@ -1923,9 +1907,10 @@ mod tests {
         let (a, b) = (&[ObjectId(1)][..], &[ObjectId(2)][..]);
         let camera = Camera::new(crate::QueryPoint::from_raw(0, 0).unwrap(), 0.0, 1.0, 3);
         let ivs = [Iv {
-            exact: None,
+            exact_start: None,
             start: 0.0,
             branch: a.to_vec(),
+            start_vertex: None,
         }];
         let shared = CoverageTable::exact(&camera.unwrap(), &ivs);
         let columns = |cols: &[&[(&[ObjectId], f64)]]| {
