@@ -19,16 +19,19 @@
 //! `|N·w| < 2¹¹⁶`, `|g| < 2¹¹⁷` — all in `i128`. The quotient `k·g/N` with `k = kn/kd`
 //! (`|kn|, kd ≤ 2²²`) would not fit as one fraction (`2²² · 2¹¹⁷`), so it is split by
 //! quotient and remainder: `t·d = q₁N + r₁`, `g = q₂N + r₂`, `kn·q₂ = q₄·kd + r₄` (Euclidean,
-//! `0 ≤ r < divisor`; `|q₁|, |q₂| ≤ |w| < 2⁵⁴` because they are coordinates of `F − a` and
-//! `E − F`), leaving
+//! `0 ≤ r < divisor`; `|q₁|, |q₂| ≤ |w| + 1 < 2⁵⁴` because they are coordinates of `F − a`
+//! and `E − F`, floored), leaving
 //!
 //! ```text
 //! E' = (a + q₁ + q₄) + (r₄·N + r₁·kd + kn·r₂) / (kd·N)
 //! ```
 //!
 //! with a numerator `< 3·2⁸⁵` and a denominator `< 2⁸⁵`; one more Euclidean division and a
-//! comparison of twice the remainder with the denominator round it. `tests/tests/ray_trees.rs`
-//! checks this against big rationals at the extremes of the range.
+//! comparison of twice the remainder with the denominator round it. The second division is
+//! none: `g = N·(w − q₁) − r₁`, so `(q₂, r₂)` is `(w − q₁, 0)` if `r₁ = 0`, else
+//! `(w − q₁ − 1, N − r₁)`; and `kn·q₂` (`< 2⁷⁶`) mostly fits a 64-bit division (−4 %
+//! instructions in the mixed frame). `tests/tests/ray_trees.rs` checks this against big
+//! rationals at the extremes of the range.
 
 use crate::geom::point::QUERY_MAX_ABS_RAW;
 use crate::geom::{Point, QueryPoint};
@@ -46,14 +49,28 @@ fn div_rem(x: i128, d: i128) -> (i128, i128) {
     }
 }
 
-/// `round(a + td/N + kn·g/(kd·N))` for one coordinate (see the module documentation).
-fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> i128 {
+/// Euclidean [`div_rem`] in 64 bits where `x` and `d` fit (a hardware division, the same
+/// quotient and remainder), else in 128.
+fn div_rem_narrow(x: i128, d: i128) -> (i128, i128) {
+    match (i64::try_from(x), i64::try_from(d)) {
+        (Ok(x), Ok(d)) => {
+            let (q, r) = (x / d, x % d);
+            let (q, r) = if r < 0 { (q - 1, r + d) } else { (q, r) };
+            (i128::from(q), i128::from(r))
+        }
+        _ => div_rem(x, d),
+    }
+}
+
+/// `round(a + td/N + kn·g/(kd·N))` with `g = N·w − td` for one coordinate (see the module
+/// documentation).
+fn round_coordinate(a: i128, td: i128, w: i128, n: i128, kn: i128, kd: i128) -> i128 {
     // With `kd = 1` and `td + kn·g` in `i128` (a mirror: `kn = −1`, `< 2¹¹⁸`) the value is
     // one fraction over `N`: the same floor and remainder with one division.
     let one = match (kn, kd) {
         // A mirror: `td − g` without the multiplication's overflow check.
-        (-1, 1) => td.checked_sub(g),
-        (_, 1) => kn.checked_mul(g).and_then(|x| x.checked_add(td)),
+        (-1, 1) => td.checked_sub(n * w - td),
+        (_, 1) => kn.checked_mul(n * w - td).and_then(|x| x.checked_add(td)),
         _ => None,
     };
     let (base, s, den) = match one {
@@ -63,8 +80,13 @@ fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> 
         }
         None => {
             let (q1, r1) = div_rem(td, n);
-            let (q2, r2) = div_rem(g, n);
-            let (q4, r4) = div_rem(kn * q2, kd);
+            // `g = N·(w − q₁) − r₁`: its quotient and remainder by `N` without a division.
+            let (q2, r2) = if r1 == 0 {
+                (w - q1, 0)
+            } else {
+                (w - q1 - 1, n - r1)
+            };
+            let (q4, r4) = div_rem_narrow(kn * q2, kd);
             let num = r4 * n + r1 * kd + kn * r2;
             let den = kd * n;
             let (j, s) = div_rem(num, den);
@@ -81,7 +103,9 @@ fn round_coordinate(a: i128, td: i128, g: i128, n: i128, kn: i128, kd: i128) -> 
 
 /// The eye `F + (kn/kd)·(E − F)` for the foot `F` of `e` on the line `ab`, rounded to the
 /// query grid (nearest, ties away from zero). `None` if `a == b`, `kd ≤ 0`, a factor is
-/// beyond `2²²` in magnitude, or the result leaves the query range.
+/// beyond `2²²` in magnitude, or the result leaves the query range. Inlined: a mirror's
+/// constant factor folds its checks and products away.
+#[inline]
 pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Option<QueryPoint> {
     if kd <= 0 || kd > 1 << 22 || kn.unsigned_abs() > 1 << 22 {
         return None;
@@ -112,10 +136,9 @@ pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Opt
     } else {
         let t = wx * dx + wy * dy;
         let (tdx, tdy) = (t * dx, t * dy);
-        let (gx, gy) = (n * wx - tdx, n * wy - tdy);
         (
-            round_coordinate(i128::from(aq.x()), tdx, gx, n, kn, kd),
-            round_coordinate(i128::from(aq.y()), tdy, gy, n, kn, kd),
+            round_coordinate(i128::from(aq.x()), tdx, wx, n, kn, kd),
+            round_coordinate(i128::from(aq.y()), tdy, wy, n, kn, kd),
         )
     };
     let lim = i128::from(QUERY_MAX_ABS_RAW);
