@@ -318,7 +318,7 @@ const FLOOR_HINTS: usize = 16;
 /// (index in the object) the first piece of its last split started on: the next split of
 /// the object (a neighbouring piece, a close eye) mostly starts on it too, and trying it
 /// first spares the scan of the facing edges (−1.9 % instructions in the hall frame; 16
-/// slots save no more). Only a hint ([`Split::hint`]); emptied with the other stacks at
+/// slots save no more). Only a hint ([`Cut::hint`]); emptied with the other stacks at
 /// every tree.
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 type Edges = [Option<(ObjectId, usize)>; EDGE_HINTS];
@@ -636,11 +636,20 @@ enum SplitKind {
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 struct Split {
     level: Level,
-    m: ObjectId,
-    kind: SplitKind,
+    cut: Cut,
     from: Dir,
     to: Dir,
     first: Boundary,
+}
+
+/// How far a split has cut its range: the object, how its pieces continue, the last edge
+/// piece yielded. Apart from the range, which a split done with its first piece never
+/// copies (it is the piece it was made from).
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+#[derive(Clone, Copy)]
+struct Cut {
+    m: ObjectId,
+    kind: SplitKind,
     /// The start direction (from the eye) and the edge (index in `m`) of the last edge
     /// piece yielded.
     last: Option<((i128, i128), usize)>,
@@ -648,6 +657,16 @@ struct Split {
     /// at the start of the range (see [`Edges`]).
     hint: Option<usize>,
     done: bool,
+}
+
+/// An edge piece of a split's range: the edge (global vertex indices in `m`'s order) and
+/// the vertices where its piece starts and ends in walk order (`None`: at the range's
+/// start or end).
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+struct EdgePiece {
+    edge: (usize, usize),
+    start: Option<usize>,
+    end: Option<usize>,
 }
 
 /// A resumable walk read one cluster of events at a time: the steps whose tangent vertex
@@ -667,6 +686,23 @@ struct Cluster {
     lap: u8,
 }
 
+impl Cluster {
+    /// A cluster to overwrite ([`Events::cluster`]).
+    fn empty() -> Cluster {
+        let none = Step {
+            angle: Angle::ZERO,
+            vertex: None,
+            ahead: false,
+            cylinder: CylinderId::from_raw(0),
+        };
+        Cluster {
+            first: none,
+            last: none,
+            lap: 0,
+        }
+    }
+}
+
 impl Events {
     fn new(walker: Walker, ahead_only: bool) -> Events {
         Events {
@@ -679,6 +715,8 @@ impl Events {
 
     /// The next step that counts from the walker (not `peek`), with its exact lap: a step
     /// exactly at θ = 0 that the perturbation puts just below 2π belongs to the next lap.
+    /// Inlined into [`Events::cluster`]'s one call.
+    #[inline(always)]
     fn step<S: Storage>(
         &mut self,
         complex: &Complex<S>,
@@ -697,30 +735,45 @@ impl Events {
         Ok(None)
     }
 
+    /// The next cluster, written to `out` (two steps with their angles, which every move
+    /// copies; kept out of the frames, which it would enlarge); `false` when there is none.
     fn cluster<S: Storage>(
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
-    ) -> Result<Option<Cluster>, WalkError> {
+        out: &mut Cluster,
+    ) -> Result<bool, WalkError> {
         // The step ending the last cluster is this one's first: taken here, not through
-        // `step`, whose call (the walker inlined) costs more than the step it returns.
-        let (first, lap) = match self.peek.take() {
-            Some(p) => p,
-            None => match self.step(complex, scene)? {
-                Some(p) => p,
-                None => return Ok(None),
-            },
+        // `step`, whose walker costs more than the step it returns.
+        let mut open = match self.peek.take() {
+            Some((first, lap)) => {
+                *out = Cluster {
+                    first,
+                    last: first,
+                    lap,
+                };
+                true
+            }
+            None => false,
         };
-        let mut last = first;
+        // One call of `step`, inlined: the walker once, without a call per step (−1.2 %
+        // instructions in the hall frame).
         while let Some((s, l)) = self.step(complex, scene)? {
-            if l == lap && s.angle.cmp_exact(&first.angle) == Ordering::Equal {
-                last = s;
+            if !open {
+                *out = Cluster {
+                    first: s,
+                    last: s,
+                    lap: l,
+                };
+                open = true;
+            } else if l == out.lap && s.angle.cmp_exact(&out.first.angle) == Ordering::Equal {
+                out.last = s;
             } else {
                 self.peek = Some((s, l));
                 break;
             }
         }
-        Ok(Some(Cluster { first, last, lap }))
+        Ok(open)
     }
 }
 
@@ -981,7 +1034,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     }
     let primary = tree.primary_walk(q, tree.primary_start(q, start, &f), depth, f, t, false);
     scratch.push(primary.level, Frame::Primary(primary))?;
-    tree.drive(scratch, &mut em)?;
+    tree.drive(scratch, &mut em, &mut Piece::empty())?;
     em.finish();
     Ok(())
 }
@@ -1050,7 +1103,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let zero = Angle::ZERO;
         let mut walk = self.primary_walk(q, (start, zero), 0, zero, zero, false);
         let mut seen = self.complex.ceiling(start);
-        while let Some(c) = walk.events.cluster(self.complex, self.scene)? {
+        let c = &mut Cluster::empty();
+        while walk.events.cluster(self.complex, self.scene, c)? {
             // Round once (lap 1 holds the events at θ = 0 that end the first lap).
             if c.lap > 1 || (c.lap == 1 && c.first.angle.cmp_exact(&zero) != Ordering::Equal) {
                 break;
@@ -1078,7 +1132,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut walk = self.primary_walk(q, (start, Angle::ZERO), depth, f, f, true);
         let mut last = Piece::empty();
         let mut any = false;
-        while walk.next_piece(self, &mut last)? {
+        let c = &mut Cluster::empty();
+        while walk.next_piece(self, &mut last, c)? {
             any = true;
         }
         if !any {
@@ -1097,7 +1152,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             current: None,
         };
         self.resolve_piece(scratch, walk.level, &mut last, &mut em, false)?;
-        self.drive(scratch, &mut em)?;
+        self.drive(scratch, &mut em, &mut last)?;
         em.finish();
         Ok(left)
     }
@@ -1107,14 +1162,19 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// its capacity.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
-        allow(unused_variables)
+        allow(unused_variables, unused_assignments)
     )]
     fn drive<F: Frames, K: FnMut(Interval<'_>)>(
         &self,
         sc: &mut Stacks<F>,
         em: &mut Emitter<'_, K>,
+        piece: &mut Piece,
     ) -> Result<(), WalkError> {
-        let mut piece = Piece::empty();
+        let mut cluster = Cluster::empty();
+        // The top frame was just pushed, its range and first boundary as `piece` holds them:
+        // its first piece need not write what it shares with the range (the usual piece
+        // behind a mirror is the whole range).
+        let mut fresh = false;
         loop {
             let (stage, level_len) = (sc.hops.len(), sc.branch.len());
             let Some(top) = sc.frames.top() else {
@@ -1125,38 +1185,49 @@ impl<S: Storage> Tree<'_, '_, S> {
             match top {
                 Frame::Primary(w) => {
                     let level = w.level;
-                    if w.next_piece(self, &mut piece)? {
-                        self.resolve_piece(sc, level, &mut piece, em, false)?;
+                    fresh = if w.next_piece(self, piece, &mut cluster)? {
+                        self.resolve_piece(sc, level, piece, em, false)?
                     } else {
                         sc.pop(level);
-                    }
+                        false
+                    };
                 }
                 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
                 Frame::Walk(w) => {
                     let level = w.level;
-                    if w.next_piece(self, sc.exacts.flat(), stage, level_len, &mut piece)? {
+                    let (c, at) = (&mut cluster, (stage, level_len));
+                    fresh = if w.next_piece(self, sc.exacts.flat(), at, (piece, fresh), c)? {
                         // Its last piece: the walk leaves the stack now.
                         let left = w.done;
                         if left {
                             sc.leave(level);
                         }
-                        self.resolve_piece(sc, level, &mut piece, em, left)?;
+                        self.resolve_piece(sc, level, piece, em, left)?
                     } else {
                         sc.pop(level);
-                    }
+                        false
+                    };
                 }
                 #[cfg(any(feature = "mirrors", feature = "refraction"))]
                 Frame::Split(s) => {
-                    let (level, m, kind) = (s.level, s.m, s.kind);
-                    match s.next_edge(self, sc.exacts.flat(), stage, level_len, &mut piece, false) {
+                    let (level, m, kind) = (s.level, s.cut.m, s.cut.kind);
+                    let at = (stage, level_len);
+                    fresh = match s.next_edge(self, sc.exacts.flat(), at, (piece, fresh)) {
                         // Done with its last edge piece, the split leaves the stack now.
-                        Some(e) if s.done => {
+                        Some(e) if s.cut.done => {
                             sc.leave(level);
-                            self.change_eye(sc, level, m, kind, &mut piece, e, true)?
+                            self.change_eye(sc, level, m, kind, piece, e, true)?;
+                            true
                         }
-                        Some(e) => self.change_eye(sc, level, m, kind, &mut piece, e, false)?,
-                        None => sc.pop(level),
-                    }
+                        Some(e) => {
+                            self.change_eye(sc, level, m, kind, piece, e, false)?;
+                            true
+                        }
+                        None => {
+                            sc.pop(level);
+                            false
+                        }
+                    };
                 }
             }
         }
@@ -1166,7 +1237,8 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// or the frames that walk on behind it (`p` may be overwritten). `left`: the frame has
     /// left the stack with this, its last piece (sparing the driver a step); the stacks are
     /// restored as its pop would have, after a leaf or by the frame pushed in its place,
-    /// which holds its place in the capacity.
+    /// which holds its place in the capacity. `true` if it pushed a frame (now the top) whose
+    /// range and first boundary are `p`'s as left here.
     // Without any ray type past the primary view, every piece is a leaf.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
@@ -1179,13 +1251,13 @@ impl<S: Storage> Tree<'_, '_, S> {
         p: &mut Piece,
         em: &mut Emitter<'_, K>,
         left: bool,
-    ) -> Result<(), WalkError> {
+    ) -> Result<bool, WalkError> {
         let Some(c) = p.ceiling else {
             em.leaf(self, &sc.hops, &sc.branch, &p.boundary)?;
             if left {
                 sc.restore(level);
             }
-            return Ok(());
+            return Ok(false);
         };
         let material = self.scene.object(c).ok_or(WalkError::Corrupt)?.material;
         // A frame pushed here restores the stacks as they are now, or in place of `level`'s.
@@ -1206,9 +1278,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         };
         match material {
             #[cfg(feature = "screens")]
-            Material::Screen => {
-                self.push_range_walk(sc, here, c, (&p.from, &p.to), &p.boundary, false)
-            }
+            Material::Screen => self
+                .push_range_walk(sc, here, c, (&p.from, &p.to), &p.boundary, false)
+                .map(|()| true),
             #[cfg(feature = "mirrors")]
             Material::Mirror if level.depth > 0 => self.split(sc, here, c, SplitKind::Mirror, p),
             #[cfg(feature = "refraction")]
@@ -1228,7 +1300,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 if left {
                     sc.restore(level);
                 }
-                Ok(())
+                Ok(false)
             }
         }
     }
@@ -1250,11 +1322,12 @@ impl<S: Storage> Tree<'_, '_, S> {
 
 impl PrimaryWalk {
     /// The next piece inside the range, in counter-clockwise order from `f`, written to
-    /// `out`; `false` (and `out` untouched) when there is none.
+    /// `out`; `false` (and `out` untouched) when there is none. `c`: room for a cluster.
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         out: &mut Piece,
+        c: &mut Cluster,
     ) -> Result<bool, WalkError> {
         if self.done {
             return Ok(false);
@@ -1262,14 +1335,14 @@ impl PrimaryWalk {
         let (q, f) = (self.level.eye, self.f);
         loop {
             // The walk ends past `t` (on lap 2): `t` closes the last piece.
-            let Some(c) = self.events.cluster(tree.complex, tree.scene)? else {
+            if !self.events.cluster(tree.complex, tree.scene, c)? {
                 self.done = true;
                 out.from = self.cur_from.clone();
                 out.to = Dir::at(self.t);
                 out.ceiling = self.seen;
                 out.boundary = self.cur_boundary;
                 return Ok(true);
-            };
+            }
             let after = tree.complex.ceiling(c.last.cylinder);
             let at_f = match c.lap.cmp(&0) {
                 Ordering::Equal => c.first.angle.cmp_exact(&f),
@@ -2368,14 +2441,17 @@ impl<S: Storage> Tree<'_, '_, S> {
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl RangeWalk {
     /// The next piece of the range in walk order; `stage` and `level` are the lengths of the
-    /// hop and branch stacks above this frame (its boundaries' stage and level).
+    /// hop and branch stacks above this frame (its boundaries' stage and level). `fresh`:
+    /// `out` holds the range and first boundary the walk was pushed with: the first piece
+    /// does not write the end and boundary it shares with them (its start, which an event
+    /// on the opening ray may move, it does). `c`: room for a cluster.
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         exacts: &[(Wide, Wide)],
-        stage: usize,
-        level: usize,
-        out: &mut Piece,
+        (stage, level): (usize, usize),
+        (out, fresh): (&mut Piece, bool),
+        c: &mut Cluster,
     ) -> Result<bool, WalkError> {
         if self.done {
             return Ok(false);
@@ -2383,7 +2459,7 @@ impl RangeWalk {
         let (eye, ccw) = (self.level.eye, self.level.ccw);
         let mut end = None;
         if let Some(events) = self.events.as_mut() {
-            while let Some(c) = events.cluster(tree.complex, tree.scene)? {
+            while events.cluster(tree.complex, tree.scene, c)? {
                 match self.to.place(exacts, &c.first.angle, Ordering::Less, ccw) {
                     // On the closing ray: not inside the open range.
                     Ordering::Equal => {
@@ -2413,10 +2489,12 @@ impl RangeWalk {
                     out.from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
                     out.to = Dir::of(&c.first);
                     out.ceiling = self.seen;
-                    out.boundary = core::mem::replace(
-                        &mut self.cur_boundary,
-                        tree.event_boundary(stage, level, eye, &out.to),
-                    );
+                    let next = tree.event_boundary(stage, level, eye, &out.to);
+                    if fresh {
+                        self.cur_boundary = next;
+                    } else {
+                        out.boundary = core::mem::replace(&mut self.cur_boundary, next);
+                    }
                     self.seen = after;
                     return Ok(true);
                 }
@@ -2424,9 +2502,15 @@ impl RangeWalk {
         }
         self.done = true;
         out.from = self.cur_from.clone();
-        out.to = end.unwrap_or_else(|| self.to.clone());
+        match end {
+            Some(e) => out.to = e,
+            None if fresh => {}
+            None => out.to = self.to.clone(),
+        }
         out.ceiling = self.seen;
-        out.boundary = self.cur_boundary;
+        if !fresh {
+            out.boundary = self.cur_boundary;
+        }
         Ok(true)
     }
 }
@@ -2634,7 +2718,8 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// Splits the piece `p` seen from `level` by the edges of `m` and continues its first
     /// edge piece (written over `p`). The split frame is pushed only if more may follow: a
     /// split done with its first piece leaves its place to that piece's frame (the usual
-    /// mirror piece lies on one edge; a frame is large, and every push a copy).
+    /// mirror piece lies on one edge; a frame is large, and every push a copy). `true` if a
+    /// frame was pushed, as [`Tree::resolve_piece`].
     fn split<F: Frames>(
         &self,
         sc: &mut Stacks<F>,
@@ -2642,27 +2727,47 @@ impl<S: Storage> Tree<'_, '_, S> {
         m: ObjectId,
         kind: SplitKind,
         p: &mut Piece,
-    ) -> Result<(), WalkError> {
+    ) -> Result<bool, WalkError> {
         // The split's place, as if pushed.
         sc.room(1 + level.held)?;
         // Direct-mapped: the slot holds `m`'s edge, or another object's.
         let slot = m.0 as usize % EDGE_HINTS;
         let hint = sc.edges.get(slot).copied().flatten();
         let hint = hint.filter(|&(o, _)| o == m).map(|(_, k)| k);
-        let mut s = Split::new(level, m, kind, p, hint);
-        let (stage, index) = (sc.hops.len(), sc.branch.len());
-        let Some(e) = s.next_edge(self, sc.exacts.flat(), stage, index, p, true) else {
-            sc.restore(level);
-            return Ok(());
+        let mut cut = Cut {
+            m,
+            kind,
+            last: None,
+            hint,
+            done: false,
         };
-        if let (Some(h), Some((_, k))) = (sc.edges.get_mut(slot), s.last) {
+        let (stage, index) = (sc.hops.len(), sc.branch.len());
+        let ends = (&p.from, &p.to);
+        let Some(e) = cut.next(self, sc.exacts.flat(), (level.eye, level.ccw), ends) else {
+            sc.restore(level);
+            return Ok(false);
+        };
+        if let (Some(h), Some((_, k))) = (sc.edges.get_mut(slot), cut.last) {
             *h = Some((m, k));
         }
-        let left = s.done;
+        let left = cut.done;
         if !left {
-            sc.push(level, Frame::Split(s))?;
+            // More pieces may follow: the frame keeps the range, before `p` becomes the first.
+            sc.push(
+                level,
+                Frame::Split(Split {
+                    level,
+                    cut,
+                    from: p.from.clone(),
+                    to: p.to.clone(),
+                    first: p.boundary,
+                }),
+            )?;
         }
-        self.change_eye(sc, level, m, kind, p, e, left)
+        // `p` is the range: the ends and boundary the piece shares with it are there.
+        self.write_edge_piece((level.eye, stage, index), &e, p, None);
+        self.change_eye(sc, level, m, kind, p, e.edge, left)?;
+        Ok(true)
     }
 
     /// Continues the edge piece `p` (its range in the split frame's direction, overwritten
@@ -2734,14 +2839,16 @@ impl<S: Storage> Tree<'_, '_, S> {
                 here,
                 Frame::Split(Split {
                     level: here,
-                    m,
-                    kind: SplitKind::Exit(eta),
+                    cut: Cut {
+                        m,
+                        kind: SplitKind::Exit(eta),
+                        last: None,
+                        hint: None,
+                        done: false,
+                    },
                     from: p.from.clone(),
                     to: p.to.clone(),
                     first: p.boundary,
-                    last: None,
-                    hint: None,
-                    done: false,
                 }),
             ),
             _ => {
@@ -2847,58 +2954,55 @@ impl SplitKind {
 
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl Split {
-    fn new(level: Level, m: ObjectId, kind: SplitKind, p: &Piece, hint: Option<usize>) -> Split {
-        Split {
-            level,
-            m,
-            kind,
-            from: p.from.clone(),
-            to: p.to.clone(),
-            first: p.boundary,
-            last: None,
-            hint,
-            done: false,
-        }
-    }
-
     /// The next edge piece in the frame's direction: its edge, with its range in walk order
-    /// and its first boundary written to `out` (its ceiling is left as it is). The nonempty
-    /// pieces are disjoint, so each is the one whose start comes first after the last one's.
-    /// `fresh`: `out` is the piece the split was just made from, so the ends and boundary
-    /// the piece shares with the range are already there (the usual mirror piece is the
-    /// whole range: nothing to copy back).
-    #[allow(clippy::too_many_arguments)]
+    /// and its first boundary written to `out` (its ceiling is left as it is); `stage` and
+    /// `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the split's range
+    /// and first boundary (the split was just pushed with them).
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         exacts: &[(Wide, Wide)],
-        stage: usize,
-        level: usize,
-        out: &mut Piece,
-        fresh: bool,
+        (stage, level): (usize, usize),
+        (out, fresh): (&mut Piece, bool),
     ) -> Option<(usize, usize)> {
+        let (eye, ccw) = (self.level.eye, self.level.ccw);
+        let e = self
+            .cut
+            .next(tree, exacts, (eye, ccw), (&self.from, &self.to))?;
+        let range = (!fresh).then_some((&self.from, &self.to, &self.first));
+        tree.write_edge_piece((eye, stage, level), &e, out, range);
+        Some(e.edge)
+    }
+}
+
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+impl Cut {
+    /// The next edge piece of the range `(from, to)` seen from `eye` in the direction
+    /// `ccw`. The nonempty pieces are disjoint, so each is the one whose start comes first
+    /// after the last one's.
+    fn next<S: Storage>(
+        &mut self,
+        tree: &Tree<'_, '_, S>,
+        exacts: &[(Wide, Wide)],
+        (eye, ccw): (QueryPoint, bool),
+        (from, to): (&Dir, &Dir),
+    ) -> Option<EdgePiece> {
         if self.done {
             return None;
         }
-        let (eye, ccw) = (self.level.eye, self.level.ccw);
         let front = self.kind.front();
-        let (lo, hi) = if ccw {
-            (&self.from, &self.to)
-        } else {
-            (&self.to, &self.from)
-        };
+        let (lo, hi) = if ccw { (from, to) } else { (to, from) };
         let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
         // Both ends on one direction (see `map_range`): the one edge the ray just before
         // `hi` crosses, else the one just after it, as `push_range_walk` takes such a range.
         if cross(lv, hv) == 0 {
             self.done = true;
-            let e = tree.split_collapsed(eye, self.m, hi, front)?;
-            if !fresh {
-                out.from = self.from.clone();
-                out.to = self.to.clone();
-                out.boundary = self.first;
-            }
-            return Some(e);
+            let edge = tree.split_collapsed(eye, self.m, hi, front)?;
+            return Some(EdgePiece {
+                edge,
+                start: None,
+                end: None,
+            });
         }
         // In walk order: `a` before `b`.
         let before = |a: (i128, i128), b: (i128, i128)| {
@@ -2983,31 +3087,45 @@ impl Split {
             return None;
         };
         self.last = Some((key, k));
-        // Written field by field: a piece's fields are large, and every move is a copy.
-        match start {
+        // The piece reaches the end of the range: the facing edges' pieces are disjoint, so
+        // no later one is nonempty.
+        self.done = end.is_none();
+        Some(EdgePiece { edge, start, end })
+    }
+}
+
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+impl<S: Storage> Tree<'_, '_, S> {
+    /// Writes the edge piece `e` seen from `eye` (its boundaries at the given stage and
+    /// level) to `out`: its range in walk order and its first boundary, the ends it shares
+    /// with the split's range from `range` (the range's ends and first boundary) — or
+    /// already in `out` if `None` (the piece the split was made from: the usual mirror
+    /// piece is the whole range, nothing to copy back). Field by field: a piece's fields
+    /// are large, and every move is a copy.
+    fn write_edge_piece(
+        &self,
+        (eye, stage, level): (QueryPoint, usize, usize),
+        e: &EdgePiece,
+        out: &mut Piece,
+        range: Option<(&Dir, &Dir, &Boundary)>,
+    ) {
+        match (e.start, range) {
             // The hit (or exit) edge changes at vertex `v`.
-            Some(v) => {
-                out.from = tree.toward(eye, v);
-                out.boundary = tree.event_boundary(stage, level, eye, &out.from);
+            (Some(v), _) => {
+                out.from = self.toward(eye, v);
+                out.boundary = self.event_boundary(stage, level, eye, &out.from);
             }
-            None if fresh => {}
-            None => {
-                out.from = self.from.clone();
-                out.boundary = self.first;
+            (None, Some((from, _, first))) => {
+                out.from = from.clone();
+                out.boundary = *first;
             }
+            (None, None) => {}
         }
-        match end {
-            Some(v) => out.to = tree.toward(eye, v),
-            // The piece reaches the end of the range: the facing edges' pieces are disjoint,
-            // so no later one is nonempty.
-            None => {
-                self.done = true;
-                if !fresh {
-                    out.to = self.to.clone();
-                }
-            }
+        match (e.end, range) {
+            (Some(v), _) => out.to = self.toward(eye, v),
+            (None, Some((_, to, _))) => out.to = to.clone(),
+            (None, None) => {}
         }
-        Some(edge)
     }
 }
 
@@ -3746,6 +3864,123 @@ mod tests {
             located > 2000 && moved > 100 && by_top > 50,
             "{located} {moved} {by_top}"
         );
+    }
+
+    /// An anchored walk's first piece written over the range it was pushed with (`fresh`:
+    /// the end and boundary it shares with the range not written) is the piece written
+    /// whole, and so are the pieces after it, for ranges between vertices' directions from
+    /// eyes on the lines of walls and elsewhere.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    #[test]
+    fn fresh_range_walk_pieces_are_the_written_ones() {
+        use super::{
+            cross, ranked, Boundary, Cluster, Dir, ExactSlots, Frame, Frames, Level, Piece, Rule,
+            Stacks, Tree,
+        };
+        use crate::geom::sos::Angle;
+        let (s, c) = anchored();
+        let s = s.as_ref();
+        let tree = Tree {
+            complex: &c,
+            scene: &s,
+        };
+        let mut next = uniform(7);
+        let (mut walks, mut pieces) = (0, 0);
+        let n = s.vertices().len();
+        for v in c.vertices() {
+            let b = v.bitangent;
+            let (p, r) = (tree.qpoint(b.first), tree.qpoint(b.second));
+            for k in 0..5 {
+                let q = if k < 4 {
+                    let t = [-2, -1, 2, 3][k];
+                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()))
+                } else {
+                    QueryPoint::from_f64(
+                        next(2400) as f64 / 100.0 - 12.0,
+                        next(2400) as f64 / 100.0 - 12.0,
+                    )
+                    .ok()
+                };
+                let Some(q) = q else { continue };
+                let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
+                for (h, ccw) in [b.first, b.second]
+                    .into_iter()
+                    .flat_map(|h| [(h, true), (h, false)])
+                {
+                    let from = toward(h);
+                    // Ends a few vertices' directions on, less than a half turn.
+                    let sign = |t: &Dir| cross(from.angle.vector(), t.angle.vector()).signum();
+                    let ends = (0..n)
+                        .map(toward)
+                        .filter(|t| sign(t) == if ccw { 1 } else { -1 });
+                    for to in ends.take(3) {
+                        let first = Boundary {
+                            exact: None,
+                            rule: Rule {
+                                stage: 0,
+                                eye: q,
+                                dir: from.angle.vector(),
+                                level: 0,
+                                fallback: Some(h),
+                            },
+                        };
+                        let level = Level {
+                            eye: q,
+                            depth: 1,
+                            ccw,
+                            hops: 0,
+                            branch: 0,
+                            exacts: 0,
+                            held: 0,
+                        };
+                        for m in (0..s.len() as u32).map(ObjectId) {
+                            let run = |fresh: bool| {
+                                let mut sc = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
+                                tree.push_range_walk(
+                                    &mut sc,
+                                    level,
+                                    m,
+                                    (&from, &to),
+                                    &first,
+                                    false,
+                                )
+                                .ok()?;
+                                let mut out = Piece::empty();
+                                if fresh {
+                                    (out.from, out.to, out.boundary) =
+                                        (from.clone(), to.clone(), first);
+                                }
+                                let (mut fresh, mut c) = (fresh, Cluster::empty());
+                                let mut written = Vec::new();
+                                let Some(Frame::Walk(w)) = sc.frames.top() else {
+                                    return None;
+                                };
+                                while w
+                                    .next_piece(&tree, &[], (0, 0), (&mut out, fresh), &mut c)
+                                    .ok()?
+                                {
+                                    fresh = false;
+                                    let Piece {
+                                        from,
+                                        to,
+                                        ceiling,
+                                        boundary,
+                                    } = &out;
+                                    written
+                                        .push(format!("{from:?} {to:?} {ceiling:?} {boundary:?}"));
+                                }
+                                Some(written)
+                            };
+                            let whole = run(false);
+                            assert_eq!(run(true), whole, "{q:?} {from:?} {to:?} {m:?} {ccw}");
+                            walks += usize::from(whole.is_some());
+                            pieces += whole.map_or(0, |w| w.len());
+                        }
+                    }
+                }
+            }
+        }
+        assert!(walks > 1000 && pieces > walks, "{walks} {pieces}");
     }
 
     /// The side of a cylinder's arc taken at its arc vertex (`Tree::arc_after`) is the
