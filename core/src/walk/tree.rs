@@ -3701,6 +3701,40 @@ mod tests {
         (s, c)
     }
 
+    /// The eyes of the anchored-walk tests, with the two tangent vertices of a wall of `c`:
+    /// for each wall, on its line beyond either tangent point (openings exactly at the
+    /// wall's angle, through one of its vertices), then `anywhere` eyes in the scene's box
+    /// drawn from `seed`.
+    #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+    fn wall_eyes(
+        c: &crate::partition::Complex,
+        s: &crate::scene::SceneRef<'_>,
+        anywhere: usize,
+        seed: u64,
+    ) -> Vec<(QueryPoint, [usize; 2])> {
+        let mut next = uniform(seed);
+        let mut eyes = Vec::new();
+        for v in c.vertices() {
+            let b = v.bitangent;
+            let (p, r) = (s.vertices()[b.first], s.vertices()[b.second]);
+            let (p, r) = (p.to_query(), r.to_query());
+            for k in 0..4 + anywhere {
+                let q = if k < 4 {
+                    let t = [-2, -1, 2, 3][k];
+                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()))
+                } else {
+                    QueryPoint::from_f64(
+                        next(2400) as f64 / 100.0 - 12.0,
+                        next(2400) as f64 / 100.0 - 12.0,
+                    )
+                    .ok()
+                };
+                eyes.extend(q.map(|q| (q, [b.first, b.second])));
+            }
+        }
+        eyes
+    }
+
     /// The start cylinder the climb of a floor's sheet finds (`Tree::stack_floor`: chain
     /// sides by bounding box, arc vertex or the floor's extremes, one wall tested) is the
     /// one the scan with the full containment test finds, for eyes on the lines of walls
@@ -3721,58 +3755,41 @@ mod tests {
             complex: &c,
             scene: &s,
         };
-        let mut next = uniform(5);
         let (mut climbed, mut at_wall) = (0, 0);
-        for v in c.vertices() {
-            let b = v.bitangent;
-            let (p, r) = (tree.qpoint(b.first), tree.qpoint(b.second));
-            for k in 0..6 {
-                // On the wall's line beyond either tangent point, or anywhere.
-                let q = if k < 4 {
-                    let t = [-2, -1, 2, 3][k];
-                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()))
-                } else {
-                    QueryPoint::from_f64(
-                        next(2400) as f64 / 100.0 - 12.0,
-                        next(2400) as f64 / 100.0 - 12.0,
-                    )
-                    .ok()
-                };
-                let Some(q) = q else { continue };
-                for h in [b.first, b.second] {
-                    let a = Angle::from_query(q, ranked(&s, h));
-                    for (m, ccw) in (0..s.len() as u32).flat_map(|m| [(m, true), (m, false)]) {
-                        let m = ObjectId(m);
-                        for bound in [Bound::Lower, Bound::Upper] {
-                            // The reference: some vertex on the chain's side by the full rule.
-                            let o = s.object(m).unwrap();
-                            let some = if bound == Bound::Lower {
-                                Sign::Negative
-                            } else {
-                                Sign::Positive
-                            };
-                            let any = (o.first_vertex()..o.first_vertex() + o.len()).any(|v| {
-                                match super::cross_q(a.vector(), tree.qpoint(v), q) {
-                                    0 => tree.side_after(q, &a, v, ccw) == some,
-                                    x => Sign::of_i128(x) == some,
-                                }
-                            });
-                            let chain = Chain { object: m, bound };
-                            let side = tree.chain_after(q, &a, chain, ccw);
-                            assert_eq!(side == some, any, "{q:?} {a:?} {chain:?}");
-                        }
-                        let Some(id) = tree.stack_floor(q, m, &a, ccw) else {
-                            continue;
+        for (q, hs) in wall_eyes(&c, &s, 2, 5) {
+            for h in hs {
+                let a = Angle::from_query(q, ranked(&s, h));
+                for (m, ccw) in (0..s.len() as u32).flat_map(|m| [(m, true), (m, false)]) {
+                    let m = ObjectId(m);
+                    for bound in [Bound::Lower, Bound::Upper] {
+                        // The reference: some vertex on the chain's side by the full rule.
+                        let o = s.object(m).unwrap();
+                        let some = if bound == Bound::Lower {
+                            Sign::Negative
+                        } else {
+                            Sign::Positive
                         };
-                        assert_eq!(tree.scan_floor(q, m, &a, ccw).ok(), Some(id), "{q:?} {a:?}");
-                        climbed += 1;
-                        let cyl = c.cylinder(id).unwrap();
-                        let on = |w: Wall| {
-                            c.wall_angle(&s, w)
-                                .is_some_and(|w| w.cmp_exact(&a) == Ordering::Equal)
-                        };
-                        at_wall += usize::from(on(cyl.left) || on(cyl.right));
+                        let any = (o.first_vertex()..o.first_vertex() + o.len()).any(|v| {
+                            match super::cross_q(a.vector(), tree.qpoint(v), q) {
+                                0 => tree.side_after(q, &a, v, ccw) == some,
+                                x => Sign::of_i128(x) == some,
+                            }
+                        });
+                        let chain = Chain { object: m, bound };
+                        let side = tree.chain_after(q, &a, chain, ccw);
+                        assert_eq!(side == some, any, "{q:?} {a:?} {chain:?}");
                     }
+                    let Some(id) = tree.stack_floor(q, m, &a, ccw) else {
+                        continue;
+                    };
+                    assert_eq!(tree.scan_floor(q, m, &a, ccw).ok(), Some(id), "{q:?} {a:?}");
+                    climbed += 1;
+                    let cyl = c.cylinder(id).unwrap();
+                    let on = |w: Wall| {
+                        c.wall_angle(&s, w)
+                            .is_some_and(|w| w.cmp_exact(&a) == Ordering::Equal)
+                    };
+                    at_wall += usize::from(on(cyl.left) || on(cyl.right));
                 }
             }
         }
@@ -3798,65 +3815,58 @@ mod tests {
             scene: &s,
         };
         let (mut located, mut moved, mut by_top) = (0, 0, 0);
-        for v in c.vertices() {
-            let b = v.bitangent;
-            let (p, r) = (tree.qpoint(b.first), tree.qpoint(b.second));
-            for t in [-2, -1, 2, 3] {
-                let q =
-                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()));
-                let Some(q) = q else { continue };
-                for h in [b.first, b.second] {
-                    let fwd = Angle::from_query(q, ranked(&s, h));
-                    for (a, m, ccw) in [fwd, fwd.reversed()].into_iter().flat_map(|a| {
-                        (0..s.len() as u32).flat_map(move |m| [(a, m, true), (a, m, false)])
-                    }) {
-                        let m = ObjectId(m);
-                        let mut floors = [None; FLOOR_HINTS];
-                        let found = tree.locate_floor((&mut floors, false), q, m, &Dir::at(a), ccw);
-                        let Ok((id, theta)) = found else { continue };
-                        let cyl = c.cylinder(id).unwrap();
-                        let zero = a.is_exactly_zero();
-                        let mut want = match (ccw, zero) {
-                            (true, true) if wraps(&a) => Some(Angle::ZERO),
-                            (false, true) => None,
-                            _ => Some(a),
+        for (q, hs) in wall_eyes(&c, &s, 0, 0) {
+            for h in hs {
+                let fwd = Angle::from_query(q, ranked(&s, h));
+                for (a, m, ccw) in [fwd, fwd.reversed()].into_iter().flat_map(|a| {
+                    (0..s.len() as u32).flat_map(move |m| [(a, m, true), (a, m, false)])
+                }) {
+                    let m = ObjectId(m);
+                    let mut floors = [None; FLOOR_HINTS];
+                    let found = tree.locate_floor((&mut floors, false), q, m, &Dir::at(a), ccw);
+                    let Ok((id, theta)) = found else { continue };
+                    let cyl = c.cylinder(id).unwrap();
+                    let zero = a.is_exactly_zero();
+                    let mut want = match (ccw, zero) {
+                        (true, true) if wraps(&a) => Some(Angle::ZERO),
+                        (false, true) => None,
+                        _ => Some(a),
+                    };
+                    let behind = if ccw {
+                        Ordering::Greater
+                    } else {
+                        Ordering::Less
+                    };
+                    let mut touched = [false; 2];
+                    for (i, chain) in [cyl.bottom, cyl.top].into_iter().enumerate() {
+                        let Some(o) = chain.map(|ch| ch.object).filter(|&o| o != m) else {
+                            continue;
                         };
-                        let behind = if ccw {
-                            Ordering::Greater
-                        } else {
-                            Ordering::Less
-                        };
-                        let mut touched = [false; 2];
-                        for (i, chain) in [cyl.bottom, cyl.top].into_iter().enumerate() {
-                            let Some(o) = chain.map(|ch| ch.object).filter(|&o| o != m) else {
-                                continue;
-                            };
-                            let (tangents, count) = crate::line_space::tangents_from(&s, o, q);
-                            let mut on = false;
-                            for &(k, _) in tangents.iter().take(count) {
-                                let f = Angle::from_query(q, ranked(&s, k));
-                                for x in [f, f.reversed()] {
-                                    if x.cmp_exact(&a) == Ordering::Equal
-                                        && wraps(&x) == (!ccw && zero)
-                                        && want.is_none_or(|w| x.cmp_angle(&w) == behind)
-                                    {
-                                        want = Some(x);
-                                        on = true;
-                                    }
+                        let (tangents, count) = crate::line_space::tangents_from(&s, o, q);
+                        let mut on = false;
+                        for &(k, _) in tangents.iter().take(count) {
+                            let f = Angle::from_query(q, ranked(&s, k));
+                            for x in [f, f.reversed()] {
+                                if x.cmp_exact(&a) == Ordering::Equal
+                                    && wraps(&x) == (!ccw && zero)
+                                    && want.is_none_or(|w| x.cmp_angle(&w) == behind)
+                                {
+                                    want = Some(x);
+                                    on = true;
                                 }
                             }
-                            touched[i] |= on;
                         }
-                        let same = match (theta, want) {
-                            (Some(x), Some(y)) => x.cmp_angle(&y) == Ordering::Equal,
-                            (x, y) => x.is_none() && y.is_none(),
-                        };
-                        assert!(same, "{q:?} {a:?} {m:?} {ccw}: {theta:?}, want {want:?}");
-                        located += 1;
-                        moved += usize::from(touched != [false; 2]);
-                        // The top chain's object gave the start angle, not the bottom's.
-                        by_top += usize::from(touched == [false, true]);
+                        touched[i] |= on;
                     }
+                    let same = match (theta, want) {
+                        (Some(x), Some(y)) => x.cmp_angle(&y) == Ordering::Equal,
+                        (x, y) => x.is_none() && y.is_none(),
+                    };
+                    assert!(same, "{q:?} {a:?} {m:?} {ccw}: {theta:?}, want {want:?}");
+                    located += 1;
+                    moved += usize::from(touched != [false; 2]);
+                    // The top chain's object gave the start angle, not the bottom's.
+                    by_top += usize::from(touched == [false, true]);
                 }
             }
         }
@@ -3884,98 +3894,71 @@ mod tests {
             complex: &c,
             scene: &s,
         };
-        let mut next = uniform(7);
         let (mut walks, mut pieces) = (0, 0);
         let n = s.vertices().len();
-        for v in c.vertices() {
-            let b = v.bitangent;
-            let (p, r) = (tree.qpoint(b.first), tree.qpoint(b.second));
-            for k in 0..5 {
-                let q = if k < 4 {
-                    let t = [-2, -1, 2, 3][k];
-                    QueryPoint::from_raw(p.x() + t * (r.x() - p.x()), p.y() + t * (r.y() - p.y()))
-                } else {
-                    QueryPoint::from_f64(
-                        next(2400) as f64 / 100.0 - 12.0,
-                        next(2400) as f64 / 100.0 - 12.0,
-                    )
-                    .ok()
-                };
-                let Some(q) = q else { continue };
-                let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
-                for (h, ccw) in [b.first, b.second]
-                    .into_iter()
-                    .flat_map(|h| [(h, true), (h, false)])
-                {
-                    let from = toward(h);
-                    // Ends a few vertices' directions on, less than a half turn.
-                    let sign = |t: &Dir| cross(from.angle.vector(), t.angle.vector()).signum();
-                    let ends = (0..n)
-                        .map(toward)
-                        .filter(|t| sign(t) == if ccw { 1 } else { -1 });
-                    for to in ends.take(3) {
-                        let first = Boundary {
-                            exact: None,
-                            rule: Rule {
-                                stage: 0,
-                                eye: q,
-                                dir: from.angle.vector(),
-                                level: 0,
-                                fallback: Some(h),
-                            },
-                        };
-                        let level = Level {
+        for (q, hs) in wall_eyes(&c, &s, 1, 7) {
+            let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
+            for (h, ccw) in hs.into_iter().flat_map(|h| [(h, true), (h, false)]) {
+                let from = toward(h);
+                // Ends a few vertices' directions on, less than a half turn.
+                let sign = |t: &Dir| cross(from.angle.vector(), t.angle.vector()).signum();
+                let ends = (0..n)
+                    .map(toward)
+                    .filter(|t| sign(t) == if ccw { 1 } else { -1 });
+                for to in ends.take(3) {
+                    let first = Boundary {
+                        exact: None,
+                        rule: Rule {
+                            stage: 0,
                             eye: q,
-                            depth: 1,
-                            ccw,
-                            hops: 0,
-                            branch: 0,
-                            exacts: 0,
-                            held: 0,
-                        };
-                        for m in (0..s.len() as u32).map(ObjectId) {
-                            let run = |fresh: bool| {
-                                let mut sc = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
-                                tree.push_range_walk(
-                                    &mut sc,
-                                    level,
-                                    m,
-                                    (&from, &to),
-                                    &first,
-                                    false,
-                                )
+                            dir: from.angle.vector(),
+                            level: 0,
+                            fallback: Some(h),
+                        },
+                    };
+                    let level = Level {
+                        eye: q,
+                        depth: 1,
+                        ccw,
+                        hops: 0,
+                        branch: 0,
+                        exacts: 0,
+                        held: 0,
+                    };
+                    for m in (0..s.len() as u32).map(ObjectId) {
+                        let run = |fresh: bool| {
+                            let mut sc = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
+                            tree.push_range_walk(&mut sc, level, m, (&from, &to), &first, false)
                                 .ok()?;
-                                let mut out = Piece::empty();
-                                if fresh {
-                                    (out.from, out.to, out.boundary) =
-                                        (from.clone(), to.clone(), first);
-                                }
-                                let (mut fresh, mut c) = (fresh, Cluster::empty());
-                                let mut written = Vec::new();
-                                let Some(Frame::Walk(w)) = sc.frames.top() else {
-                                    return None;
-                                };
-                                while w
-                                    .next_piece(&tree, &[], (0, 0), (&mut out, fresh), &mut c)
-                                    .ok()?
-                                {
-                                    fresh = false;
-                                    let Piece {
-                                        from,
-                                        to,
-                                        ceiling,
-                                        boundary,
-                                    } = &out;
-                                    written
-                                        .push(format!("{from:?} {to:?} {ceiling:?} {boundary:?}"));
-                                }
-                                Some(written)
+                            let mut out = Piece::empty();
+                            if fresh {
+                                (out.from, out.to, out.boundary) =
+                                    (from.clone(), to.clone(), first);
+                            }
+                            let (mut fresh, mut c) = (fresh, Cluster::empty());
+                            let mut written = Vec::new();
+                            let Some(Frame::Walk(w)) = sc.frames.top() else {
+                                return None;
                             };
-                            let whole = run(false);
-                            assert_eq!(run(true), whole, "{q:?} {from:?} {to:?} {m:?} {ccw}");
-                            walks += usize::from(whole.is_some());
-                            pieces += whole.map_or(0, |w| w.len());
-                        }
+                            while w
+                                .next_piece(&tree, &[], (0, 0), (&mut out, fresh), &mut c)
+                                .ok()?
+                            {
+                                fresh = false;
+                                let Piece {
+                                    from,
+                                    to,
+                                    ceiling,
+                                    boundary,
+                                } = &out;
+                                written.push(format!("{from:?} {to:?} {ceiling:?} {boundary:?}"));
+                            }
+                            Some(written)
+                        };
+                        let whole = run(false);
+                        assert_eq!(run(true), whole, "{q:?} {from:?} {to:?} {m:?} {ccw}");
+                        walks += usize::from(whole.is_some());
+                        pieces += whole.map_or(0, |w| w.len());
                     }
                 }
             }
