@@ -2443,8 +2443,8 @@ impl RangeWalk {
     /// The next piece of the range in walk order; `stage` and `level` are the lengths of the
     /// hop and branch stacks above this frame (its boundaries' stage and level). `fresh`:
     /// `out` holds the range and first boundary the walk was pushed with: the first piece
-    /// does not write the end and boundary it shares with them (its start, which an event
-    /// on the opening ray may move, it does). `c`: room for a cluster.
+    /// does not write the start, end and boundary it shares with them (an event on the
+    /// opening ray, which moves the start, writes it there). `c`: room for a cluster.
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
@@ -2484,15 +2484,19 @@ impl RangeWalk {
                     self.seen = after;
                     if opening == Ordering::Equal {
                         self.cur_from = Dir::of(&c.last);
+                        if fresh {
+                            out.from = self.cur_from.clone();
+                        }
                     }
                 } else if after != self.seen {
-                    out.from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
+                    let from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
                     out.to = Dir::of(&c.first);
                     out.ceiling = self.seen;
                     let next = tree.event_boundary(stage, level, eye, &out.to);
                     if fresh {
                         self.cur_boundary = next;
                     } else {
+                        out.from = from;
                         out.boundary = core::mem::replace(&mut self.cur_boundary, next);
                     }
                     self.seen = after;
@@ -2501,7 +2505,6 @@ impl RangeWalk {
             }
         }
         self.done = true;
-        out.from = self.cur_from.clone();
         match end {
             Some(e) => out.to = e,
             None if fresh => {}
@@ -2509,6 +2512,7 @@ impl RangeWalk {
         }
         out.ceiling = self.seen;
         if !fresh {
+            out.from = self.cur_from.clone();
             out.boundary = self.cur_boundary;
         }
         Ok(true)
@@ -3877,16 +3881,17 @@ mod tests {
     }
 
     /// An anchored walk's first piece written over the range it was pushed with (`fresh`:
-    /// the end and boundary it shares with the range not written) is the piece written
-    /// whole, and so are the pieces after it, for ranges between vertices' directions from
-    /// eyes on the lines of walls and elsewhere.
+    /// the start, end and boundary it shares with the range not written) is the piece
+    /// written whole, and so are the pieces after it, for ranges between vertices'
+    /// directions from eyes on the lines of walls and elsewhere, with starts exact or not.
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     #[test]
     fn fresh_range_walk_pieces_are_the_written_ones() {
         use super::{
             cross, ranked, Boundary, Cluster, Dir, ExactSlots, Frame, Frames, Level, Piece, Rule,
-            Stacks, Tree,
+            Stacks, Tree, Wide,
         };
+        use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
         let (s, c) = anchored();
         let s = s.as_ref();
@@ -3894,18 +3899,38 @@ mod tests {
             complex: &c,
             scene: &s,
         };
-        let (mut walks, mut pieces) = (0, 0);
+        let (mut walks, mut pieces, mut moved) = (0, 0, 0);
         let n = s.vertices().len();
         for (q, hs) in wall_eyes(&c, &s, 1, 7) {
             let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
             for (h, ccw) in hs.into_iter().flat_map(|h| [(h, true), (h, false)]) {
                 let from = toward(h);
+                // The same start as an exact end whose angle is rounded before it in walk
+                // order (by about 10⁻⁶ rad, as mapped through a hop): the walk then meets
+                // the event of `h` on the opening ray, which moves the start onto `h`.
+                let v = from.angle.vector();
+                let exacts = [(Wide::from_i128(v.0), Wide::from_i128(v.1))];
+                let (mut x, mut y) = v;
+                while x.abs().max(y.abs()) >= 1 << 30 {
+                    (x, y) = (x >> 1, y >> 1);
+                }
+                let t = if ccw { 1 } else { -1 };
+                let (x, y) = ((x << 20) + t * y, (y << 20) - t * x);
+                let d = Direction::new(x as i64, y as i64).unwrap();
+                let exact = Dir {
+                    angle: Angle::constant(d),
+                    vertex: None,
+                    exact: Some(0),
+                };
                 // Ends a few vertices' directions on, less than a half turn.
                 let sign = |t: &Dir| cross(from.angle.vector(), t.angle.vector()).signum();
                 let ends = (0..n)
                     .map(toward)
                     .filter(|t| sign(t) == if ccw { 1 } else { -1 });
-                for to in ends.take(3) {
+                for (to, from) in ends
+                    .take(3)
+                    .flat_map(|t| [(t.clone(), from.clone()), (t, exact.clone())])
+                {
                     let first = Boundary {
                         exact: None,
                         rule: Rule {
@@ -3941,7 +3966,7 @@ mod tests {
                                 return None;
                             };
                             while w
-                                .next_piece(&tree, &[], (0, 0), (&mut out, fresh), &mut c)
+                                .next_piece(&tree, &exacts, (0, 0), (&mut out, fresh), &mut c)
                                 .ok()?
                             {
                                 fresh = false;
@@ -3958,12 +3983,20 @@ mod tests {
                         let whole = run(false);
                         assert_eq!(run(true), whole, "{q:?} {from:?} {to:?} {m:?} {ccw}");
                         walks += usize::from(whole.is_some());
+                        let start = format!("{from:?} ");
+                        moved +=
+                            usize::from(whole.as_ref().is_some_and(|w| {
+                                w.first().is_some_and(|p| !p.starts_with(&start))
+                            }));
                         pieces += whole.map_or(0, |w| w.len());
                     }
                 }
             }
         }
-        assert!(walks > 1000 && pieces > walks, "{walks} {pieces}");
+        assert!(
+            walks > 1000 && pieces > walks && moved > 100,
+            "{walks} {pieces} {moved}"
+        );
     }
 
     /// The side of a cylinder's arc taken at its arc vertex (`Tree::arc_after`) is the
