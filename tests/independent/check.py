@@ -9,9 +9,9 @@ only. On random scenes of disjoint convex polygons (opaque, mirror, screen) it c
   since there the count depends on the perturbation), and `complex_vertices` = 2 × that;
 * `locate --json`: the objects ahead and behind against exact ray shooting (every object,
   screens included, is an object of the complex);
-* `view --depth D --json`: at random directions (away from the printed interval ends) the
-  path of objects against an exact ray tracer (screens transparent, mirrors reflect while
-  the depth lasts).
+* `view --depth D --json`, all around and in a field of view (`--from`, `--to`): at random
+  directions (away from the printed interval ends) the path of objects against an exact
+  ray tracer (screens transparent, mirrors reflect while the depth lasts).
 
 Two families: `general` (random polygons on the 1/64 grid) and `lattice` (axis-aligned
 boxes and right triangles on the integer lattice: collinear walls, and viewpoints on
@@ -237,14 +237,25 @@ def check_scene(args, family, seed, tmp, tally):
     at = os.path.join(tmp, "%s-%d.txt" % (family, seed))
     with open(at, "w") as f:
         f.writelines("%r,%r\n" % (float(x), float(y)) for x, y in points)
-    views = vcx(args.vcx, "view", path, "--at-file", at, "--depth", str(args.depth), "--json").splitlines()
+    # All around, then a field of view (integer degrees, perhaps across 0°).
+    lo = rng.randint(0, 359)
+    fov = (lo, lo + rng.randint(1, 179))
+    for field in (None, fov):
+        extra = [] if field is None else ["--from", str(field[0]), "--to", str(field[1] % 360)]
+        views = vcx(args.vcx, "view", path, "--at-file", at, "--depth", str(args.depth), "--json", *extra)
+        bad += check_views(args, rng, objs, points, views.splitlines(), field, where, tally)
+    return bad
+
+
+def check_views(args, rng, objs, points, views, field, where, tally):
     if len(views) != len(points):
-        return bad + ["%s: %d views for %d points" % (where, len(views), len(points))]
+        return ["%s: %d views for %d points" % (where, len(views), len(points))]
+    bad = []
     for (x, y), line in zip(points, views):
         intervals = json.loads(line)["intervals"]
         ends = [e for iv in intervals for e in (iv["start"], iv["end"])]
         for _ in range(args.samples):
-            a = rng.uniform(0, 2 * math.pi)
+            a = rng.uniform(0, 2 * math.pi) if field is None else math.radians(rng.uniform(*field)) % (2 * math.pi)
             # Printed ends are rounded: a sample that close to one is not decided by them.
             if any(abs(math.remainder(a - e, 2 * math.pi)) < 1e-7 for e in ends):
                 continue
@@ -256,8 +267,8 @@ def check_scene(args, family, seed, tmp, tally):
             tally["view directions"] += 1
             tally["of them reflected"] += len(want) > 1
             if got != want:
-                bad.append("%s: view --at %r,%r --depth %d at %.9f rad: %s, expected %s"
-                           % (where, float(x), float(y), args.depth, a, got, want))
+                bad.append("%s: view --at %r,%r --depth %d (field %s) at %.9f rad: %s, expected %s"
+                           % (where, float(x), float(y), args.depth, field, a, got, want))
     return bad
 
 
