@@ -182,12 +182,13 @@ def trace(objs, px, py, dx, dy, depth):
     return path
 
 
-def free_point(rng, objs, size, lattice):
+def free_point(rng, objs, size, lattice, scale):
     while True:
         if lattice:
             x, y = F(rng.randint(0, 2 * int(size)), 2), F(rng.randint(0, 2 * int(size)), 2)
         else:
             x, y = F(round(rng.uniform(0, size) * GRID), GRID), F(round(rng.uniform(0, size) * GRID), GRID)
+        x, y = (x - F(size) / 2) * scale, (y - F(size) / 2) * scale
         ivs = [line_interval(o["vertices"], x, y, F(1), F(0)) for o in objs]
         if not any(iv is not None and (iv[0] is None or iv[0] <= 0) and (iv[1] is None or iv[1] >= 0)
                    for iv in ivs):
@@ -205,6 +206,10 @@ def check_scene(args, family, seed, tmp, tally):
     rng = random.Random("%s %d" % (family, seed))
     lattice = family == "lattice"
     objs = (lattice_scene if lattice else general_scene)(rng, args.objects, args.size)
+    # Centred on the origin and scaled (--scale 1000: near the top of the coordinate range).
+    half = F(args.size) / 2
+    objs = [dict(o, vertices=[((x - half) * args.scale, (y - half) * args.scale) for x, y in o["vertices"]])
+            for o in objs]
     path = os.path.join(tmp, "%s-%d.json" % (family, seed))
     with open(path, "w") as f:
         json.dump({"objects": [{"material": o["material"], "vertices": [[float(x), float(y)] for x, y in o["vertices"]]}
@@ -220,7 +225,7 @@ def check_scene(args, family, seed, tmp, tally):
     if stats["complex_vertices"] != 2 * stats["free_bitangents"]:
         bad.append("%s: complex_vertices %d is not 2 × free_bitangents" % (where, stats["complex_vertices"]))
     for _ in range(args.rays):
-        x, y = free_point(rng, objs, args.size, lattice)
+        x, y = free_point(rng, objs, args.size, lattice, args.scale)
         dx, dy = rng.randint(-1000, 1000), rng.randint(-1000, 1000)
         ahead, d1 = first_hit(objs, x, y, F(dx), F(dy))
         behind, d2 = first_hit(objs, x, y, F(-dx), F(-dy))
@@ -233,7 +238,7 @@ def check_scene(args, family, seed, tmp, tally):
         if (out["forward"], out["backward"]) != want:
             bad.append("%s: locate --at %r,%r --dir %d,%d: (%s, %s), expected %s"
                        % (where, float(x), float(y), dx, dy, out["forward"], out["backward"], want))
-    points = [free_point(rng, objs, args.size, lattice) for _ in range(args.views)]
+    points = [free_point(rng, objs, args.size, lattice, args.scale) for _ in range(args.views)]
     at = os.path.join(tmp, "%s-%d.txt" % (family, seed))
     with open(at, "w") as f:
         f.writelines("%r,%r\n" % (float(x), float(y)) for x, y in points)
@@ -279,7 +284,8 @@ def main():
     p.add_argument("--scenes", type=int, default=10, help="scenes per family")
     p.add_argument("--seed", type=int, default=0, help="first scene seed")
     p.add_argument("--objects", type=int, default=20)
-    p.add_argument("--size", type=float, default=30.0, help="side of the scene box")
+    p.add_argument("--size", type=int, default=30, help="side of the scene box, centred on the origin")
+    p.add_argument("--scale", type=int, default=1, help="scale factor of every coordinate (|x|, |y| ≤ scale × size / 2 must stay below 16384)")
     p.add_argument("--depth", type=int, default=4)
     p.add_argument("--rays", type=int, default=20, help="located rays per scene")
     p.add_argument("--views", type=int, default=8, help="viewpoints per scene")
