@@ -87,14 +87,16 @@ def lattice_scene(rng, n, size):
 
 def line_interval(poly, px, py, dx, dy):
     """The closed range of t with p + t·d in the counter-clockwise polygon (None: empty;
-    an unbounded end is None)."""
+    an unbounded end is None), and whether the line runs along an edge."""
     lo = hi = None
+    along = False
     for i in range(len(poly)):
         (ax, ay), (bx, by) = poly[i], poly[(i + 1) % len(poly)]
         f0, f1 = cross(bx - ax, by - ay, px - ax, py - ay), cross(bx - ax, by - ay, dx, dy)
         if f1 == 0:
             if f0 < 0:
                 return None
+            along |= f0 == 0
         elif f1 > 0:
             t = F(-f0) / f1
             lo = t if lo is None or t > lo else lo
@@ -103,7 +105,7 @@ def line_interval(poly, px, py, dx, dy):
             hi = t if hi is None or t < hi else hi
     if lo is not None and hi is not None and lo > hi:
         return None
-    return lo, hi
+    return lo, hi, along
 
 
 def first_hit(objs, px, py, dx, dy, skip=None, transparent=()):
@@ -116,10 +118,11 @@ def first_hit(objs, px, py, dx, dy, skip=None, transparent=()):
         iv = line_interval(o["vertices"], px, py, dx, dy)
         if iv is None or iv[0] is None or iv[1] is None or iv[1] <= 0:
             continue
-        lo, hi = iv
+        lo, hi, along = iv
         if lo <= 0:
             raise ValueError("the ray starts in object %d" % i)
-        degenerate |= lo == hi or (best is not None and lo == best[0])
+        # A vertex grazed, an edge followed (decided by the perturbation), a tie.
+        degenerate |= lo == hi or along or (best is not None and lo == best[0])
         if best is None or lo < best[0]:
             best = (lo, i)
     return best, degenerate
@@ -146,7 +149,7 @@ def free_bitangents(objs):
                         iv = None if k in (i, j) else line_interval(o["vertices"], a[0], a[1], dx, dy)
                         if iv is None or iv[0] > 1 or iv[1] < 0:
                             continue
-                        if iv[0] == 1 or iv[1] == 0 or iv[0] == iv[1]:
+                        if iv[0] == 1 or iv[1] == 0 or iv[0] == iv[1] or iv[2]:
                             return None
                         free = False
                         break
