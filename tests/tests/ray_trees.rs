@@ -331,6 +331,9 @@ fn virtual_eyes_round_exactly_at_the_extremes() {
         (1 << 16, 1 << 10),
         (98304, 65536),
         (65536, 87163),
+        // A last quotient of 4 and more, or negative (the division after the comparisons).
+        (229376, 65536),
+        (-98304, 65536),
     ];
     let corners = [-m, -m + 1, -1, 0, 1, m - 1, m];
     let qcorners = [-qm, -qm + 1, -1, 0, 1, qm - 1, qm];

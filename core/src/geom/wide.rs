@@ -312,61 +312,65 @@ impl Wide {
         u.0.mul_add(v.0, &u.1, v.1)
     }
 
-    /// `a·b + c·d` for `i128` factors: at most 2²⁵⁵, always within budget; [`Wide::mul_add`]
-    /// of `Wide::from_i128(a)` without its general loops (a mapped range end computes two).
+    /// `a·b + c·d` for `i128` factors `a`, `c` and `i64` factors `b`, `d`, written to
+    /// `out`: at most 2¹⁹¹, three limbs, always within budget; [`Wide::mul_add`] of
+    /// `Wide::from_i128(a)` without its general loops, and in place (a mapped range end
+    /// computes two, and a `Wide` moved is a 272-byte copy).
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction")),
         allow(dead_code)
     )]
-    pub(crate) fn mul2_i128(a: i128, b: i128, c: i128, d: i128) -> Wide {
-        let (pn, p) = product_i128(a, b);
-        let (qn, q) = product_i128(c, d);
-        let mut mag = [0u64; LIMBS];
-        if pn == qn {
+    pub(crate) fn mul2_into(a: i128, b: i64, c: i128, d: i64, out: &mut Wide) {
+        let (pn, p) = product_i64(a, b);
+        let (qn, q) = product_i64(c, d);
+        // Limbs from the fourth on stay zero (`out` may have held a longer value).
+        out.mag = [0; LIMBS];
+        let negative = if pn == qn {
+            // No carry out of the three limbs: the sum is at most 2¹⁹¹.
             let mut carry = 0u128;
-            for (slot, (&x, &y)) in mag.iter_mut().zip(p.iter().zip(&q)) {
+            for (slot, (&x, &y)) in out.mag.iter_mut().zip(p.iter().zip(&q)) {
                 let s = u128::from(x) + u128::from(y) + carry;
                 *slot = s as u64;
                 carry = s >> 64;
             }
-            if let Some(slot) = mag.get_mut(4) {
-                *slot = carry as u64;
+            pn
+        } else {
+            // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
+            let (big, small, negative) = match p.iter().rev().cmp(q.iter().rev()) {
+                Ordering::Less => (q, p, qn),
+                _ => (p, q, pn),
+            };
+            let mut borrow = false;
+            for (slot, (&x, &y)) in out.mag.iter_mut().zip(big.iter().zip(&small)) {
+                let (v, b1) = x.overflowing_sub(y);
+                let (v, b2) = v.overflowing_sub(u64::from(borrow));
+                *slot = v;
+                borrow = b1 || b2;
             }
-            return Wide::new(pn, mag, 5);
-        }
-        // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
-        let (big, small, negative) = match p.iter().rev().cmp(q.iter().rev()) {
-            Ordering::Less => (q, p, qn),
-            _ => (p, q, pn),
+            negative
         };
-        let mut borrow = false;
-        for (slot, (&x, &y)) in mag.iter_mut().zip(big.iter().zip(&small)) {
-            let (v, b1) = x.overflowing_sub(y);
-            let (v, b2) = v.overflowing_sub(u64::from(borrow));
-            *slot = v;
-            borrow = b1 || b2;
-        }
-        Wide::new(negative, mag, 4)
+        let len = out.mag.get(..3).map_or(0, |m| {
+            m.len() - m.iter().rev().take_while(|&&l| l == 0).count()
+        });
+        out.len = len as u8;
+        out.negative = negative && len > 0;
     }
 }
 
-/// `a·b` as a sign (negative) and four little-endian limbs of its magnitude: the four
-/// 64-bit partial products, each column summed in `u128` (at most four terms below 2⁶⁴).
+/// `a·b` as a sign (negative) and three little-endian limbs of its magnitude (at most
+/// 2¹²⁷ · 2⁶³ = 2¹⁹⁰): two 64-bit partial products.
 #[cfg_attr(
     not(any(feature = "mirrors", feature = "refraction")),
     allow(dead_code)
 )]
-fn product_i128(a: i128, b: i128) -> (bool, [u64; 4]) {
-    let (x, y) = (a.unsigned_abs(), b.unsigned_abs());
-    let low = u128::from(u64::MAX);
-    let (x0, x1, y0, y1) = (x & low, x >> 64, y & low, y >> 64);
-    let (p00, p01, p10, p11) = (x0 * y0, x0 * y1, x1 * y0, x1 * y1);
-    let mid = (p00 >> 64) + (p01 & low) + (p10 & low);
-    let high = (p01 >> 64) + (p10 >> 64) + (p11 & low) + (mid >> 64);
-    // Below 2²⁵⁶: the top limb takes the last carry without overflowing.
-    let top = (p11 >> 64) + (high >> 64);
+fn product_i64(a: i128, b: i64) -> (bool, [u64; 3]) {
+    let (x, y) = (a.unsigned_abs(), u128::from(b.unsigned_abs()));
+    let (lo, hi) = (u128::from(x as u64) * y, (x >> 64) * y);
+    let mid = (lo >> 64) + (hi & u128::from(u64::MAX));
+    // `hi ≤ 2¹²⁶`: the top limb takes the carry without overflowing.
+    let top = (hi >> 64) + (mid >> 64);
     let negative = (a < 0) != (b < 0) && x != 0 && y != 0;
-    (negative, [p00 as u64, mid as u64, high as u64, top as u64])
+    (negative, [lo as u64, mid as u64, top as u64])
 }
 
 impl Ord for Wide {
@@ -460,13 +464,19 @@ mod tests {
         Wide::from_i128(v)
     }
 
-    /// The `i128` fast path is the general product sum, normalized alike (`==` compares
-    /// values): random lengths and signs, zeros, cancellations and the extremes.
+    /// The `i128`·`i64` fast path is the general product sum, normalized alike (`==`
+    /// compares values): random lengths and signs, zeros, cancellations and the extremes.
     #[test]
-    fn mul2_i128_is_mul_add() {
-        let check = |a: i128, b: i128, c: i128, d: i128| {
-            let slow = w(a).mul_add(b, &w(c), d).unwrap();
-            assert_eq!(Wide::mul2_i128(a, b, c, d), slow, "{a} {b} {c} {d}");
+    fn mul2_into_is_mul_add() {
+        let check = |a: i128, b: i64, c: i128, d: i64| {
+            let slow = w(a).mul_add(b.into(), &w(c), d.into()).unwrap();
+            // Over a longer value (eight limbs): its limbs must not survive.
+            let mut got = w(-1);
+            for _ in 0..4 {
+                got = got.mul_i128(i128::MAX).unwrap();
+            }
+            Wide::mul2_into(a, b, c, d, &mut got);
+            assert_eq!(got, slow, "{a} {b} {c} {d}");
         };
         let edge = [
             0,
@@ -478,11 +488,23 @@ mod tests {
             1 << 64,
             -(1 << 64),
         ];
+        let edge64 = [
+            0,
+            1,
+            -1,
+            i64::MAX,
+            i64::MIN,
+            i64::MIN + 1,
+            1 << 32,
+            -(1 << 32),
+        ];
         for a in edge {
-            for b in edge {
+            for b in edge64 {
                 check(a, b, a, b.wrapping_neg());
-                check(a, b, b, a);
+                check(a, b, a.wrapping_neg(), b);
+                check(a, b, a, b);
                 check(a, b, 1, -1);
+                check(1, -1, a, b);
             }
         }
         let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
@@ -495,7 +517,8 @@ mod tests {
             }
         };
         for _ in 0..20_000 {
-            let (a, b, c, d) = (value(), value(), value(), value());
+            let (a, c) = (value(), value());
+            let (b, d) = ((value() >> 64) as i64, value() as i64);
             check(a, b, c, d);
             // Equal magnitudes of opposite signs cancel.
             check(a, b, a.wrapping_neg(), b);

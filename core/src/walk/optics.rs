@@ -30,8 +30,11 @@
 //! comparison of twice the remainder with the denominator round it. The second division is
 //! none: `g = N·(w − q₁) − r₁`, so `(q₂, r₂)` is `(w − q₁, 0)` if `r₁ = 0`, else
 //! `(w − q₁ − 1, N − r₁)`; and `kn·q₂` (`< 2⁷⁶`) mostly fits a 64-bit division (−4 %
-//! instructions in the mixed frame). `tests/tests/ray_trees.rs` checks this against big
-//! rationals at the extremes of the range.
+//! instructions in the mixed frame). The last quotient is below `2 + kn/kd` (`r₄·N` and
+//! `r₁·kd` are each below the denominator), so below 4 for indices below 2: a few
+//! comparisons find it; and the numerator's products are of `i64` factors, single widening
+//! multiplications (−3.7 % instructions in the mixed frame). `tests/tests/ray_trees.rs`
+//! checks this against big rationals at the extremes of the range.
 
 use crate::geom::point::QUERY_MAX_ABS_RAW;
 use crate::geom::{Point, QueryPoint};
@@ -62,34 +65,58 @@ fn div_rem_narrow(x: i128, d: i128) -> (i128, i128) {
     }
 }
 
+/// Euclidean [`div_rem`] of `x` by a positive `d` where the quotient is mostly small: in
+/// `[0, 4)` by at most three comparisons and subtractions (no software division), else by
+/// [`div_rem`].
+fn div_rem_small(x: i128, d: i128) -> (i128, i128) {
+    // `4·d < 2⁸⁷` for the denominators `kd·N < 2⁸⁵` used here.
+    if x < 0 || x >= 4 * d {
+        return div_rem(x, d);
+    }
+    let (mut q, mut r) = (0, x);
+    while r >= d {
+        (q, r) = (q + 1, r - d);
+    }
+    (q, r)
+}
+
 /// `round(a + td/N + kn·g/(kd·N))` with `g = N·w − td` for one coordinate (see the module
-/// documentation).
-fn round_coordinate(a: i128, td: i128, w: i128, n: i128, kn: i128, kd: i128) -> i128 {
+/// documentation). `N < 2⁶³` and `|kn|, kd ≤ 2²²` are `i64`, and so are the remainders
+/// below them: their products are single widening multiplications.
+fn round_coordinate(a: i128, td: i128, w: i128, n: i64, kn: i64, kd: i64) -> i128 {
+    let wide = i128::from;
     // With `kd = 1` and `td + kn·g` in `i128` (a mirror: `kn = −1`, `< 2¹¹⁸`) the value is
     // one fraction over `N`: the same floor and remainder with one division.
     let one = match (kn, kd) {
         // A mirror: `td − g` without the multiplication's overflow check.
-        (-1, 1) => td.checked_sub(n * w - td),
-        (_, 1) => kn.checked_mul(n * w - td).and_then(|x| x.checked_add(td)),
+        (-1, 1) => td.checked_sub(wide(n) * w - td),
+        (_, 1) => wide(kn)
+            .checked_mul(wide(n) * w - td)
+            .and_then(|x| x.checked_add(td)),
         _ => None,
     };
     let (base, s, den) = match one {
         Some(num) => {
-            let (q, s) = div_rem(num, n);
-            (a + q, s, n)
+            let (q, s) = div_rem(num, wide(n));
+            (a + q, s, wide(n))
         }
         None => {
-            let (q1, r1) = div_rem(td, n);
+            let (q1, r1) = div_rem(td, wide(n));
+            // `0 ≤ r₁ < N < 2⁶³`.
+            let r1 = r1 as i64;
             // `g = N·(w − q₁) − r₁`: its quotient and remainder by `N` without a division.
             let (q2, r2) = if r1 == 0 {
                 (w - q1, 0)
             } else {
                 (w - q1 - 1, n - r1)
             };
-            let (q4, r4) = div_rem_narrow(kn * q2, kd);
-            let num = r4 * n + r1 * kd + kn * r2;
-            let den = kd * n;
-            let (j, s) = div_rem(num, den);
+            let (q4, r4) = div_rem_narrow(wide(kn) * q2, wide(kd));
+            // `0 ≤ r₄ < kd ≤ 2²²`; each product below is `< 2⁸⁵`.
+            let r4 = r4 as i64;
+            let num = wide(r4) * wide(n) + wide(r1) * wide(kd) + wide(kn) * wide(r2);
+            let den = wide(kd) * wide(n);
+            // `num / den < 2 + kn/kd`: below 4 for the indices of real materials.
+            let (j, s) = div_rem_small(num, den);
             (a + q1 + q4 + j, s, den)
         }
     };
@@ -117,21 +144,21 @@ pub fn transform_eye(e: QueryPoint, a: Point, b: Point, kn: i64, kd: i64) -> Opt
         i128::from(i64::from(b.x()) - i64::from(a.x())),
         i128::from(i64::from(b.y()) - i64::from(a.y())),
     );
-    let n = dx * dx + dy * dy;
+    // `N < 2⁶³`: an `i64`.
+    let n = (dx * dx + dy * dy) as i64;
     if n == 0 {
         return None;
     }
     // w in query units; d in scene units. t·d/N is then in query units as well.
     let (wx, wy) = (i128::from(e.x() - aq.x()), i128::from(e.y() - aq.y()));
-    let (kn, kd) = (i128::from(kn), i128::from(kd));
     let (x, y) = if kd == 1 && (dx == 0 || dy == 0) {
         // An axis-parallel line with an integer factor (a mirror wall): the foot is `e`
         // with one coordinate of `a`, and the new eye lies on the grid — the value the
         // general rounding below gives, without its divisions (`|kn·w| < 2⁷⁵`).
         if dy == 0 {
-            (i128::from(e.x()), i128::from(aq.y()) + kn * wy)
+            (i128::from(e.x()), i128::from(aq.y()) + i128::from(kn) * wy)
         } else {
-            (i128::from(aq.x()) + kn * wx, i128::from(e.y()))
+            (i128::from(aq.x()) + i128::from(kn) * wx, i128::from(e.y()))
         }
     } else {
         let t = wx * dx + wy * dy;

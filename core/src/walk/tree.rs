@@ -137,7 +137,9 @@ impl Dir {
     }
 
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
-    /// direction (within a half turn), exactly.
+    /// direction (within a half turn), exactly. Inlined: mostly without an exact direction,
+    /// two single widening products (the callers' vectors are `i64`s widened).
+    #[inline]
     fn turn(&self, exacts: &[(Wide, Wide)], v: (i128, i128)) -> Sign {
         match self.exact(exacts).and_then(|x| Wide::cross_sign(x, v)) {
             Some(s) => s,
@@ -2642,20 +2644,13 @@ impl<S: Storage> Tree<'_, '_, S> {
                 out.1 = Wide::from_i128(s * (den1 * pn.1 + num1 * d.1));
                 true
             }
-            // All in `i128`: two products each, at most 2²⁵⁵ (`scaled_hit` without its
-            // general loops).
+            // Two products each of an `i128` and an `i64` (`pn` and `d` are `i64`s widened),
+            // below 2¹⁹¹ (`scaled_hit` without its general loops), scaled by `|den|`: a
+            // negative `den` negates both `i128` factors (`|den|, |num| < 2¹¹⁰`).
             None => {
-                let s = Sign::of_i128(den);
-                let hit = |p: i128, d: i128| {
-                    let h = Wide::mul2_i128(den, p, d, num);
-                    if s == Sign::Negative {
-                        h.neg()
-                    } else {
-                        h
-                    }
-                };
-                out.0 = hit(pn.0, d.0);
-                out.1 = hit(pn.1, d.1);
+                let (den, num) = if den < 0 { (-den, -num) } else { (den, num) };
+                Wide::mul2_into(den, pn.0 as i64, num, d.0 as i64, &mut out.0);
+                Wide::mul2_into(den, pn.1 as i64, num, d.1 as i64, &mut out.1);
                 true
             }
         };
