@@ -13,7 +13,7 @@ only. On random scenes of disjoint convex polygons (opaque, mirror, screen) it c
   directions (away from the printed interval ends) the path of objects against an exact
   ray tracer (screens transparent, mirrors reflect while the depth lasts).
 
-Two families: `general` (random polygons on the 1/64 grid) and `lattice` (axis-aligned
+Two families: `general` (random polygons on the 1/1024 grid) and `lattice` (axis-aligned
 boxes and right triangles on the integer lattice: collinear walls, and viewpoints on
 half-integer points, so on edge extensions and bitangents). Exit status 1 on any
 disagreement, each printed on one line.
@@ -23,7 +23,7 @@ disagreement, each printed on one line.
 import argparse, json, math, os, random, shutil, subprocess, sys, tempfile
 from fractions import Fraction as F
 
-GRID = 64  # the general family's coordinate grid: 1/64 (well inside the scene grid 2^-16)
+GRID = 1024  # the general family's coordinate grid: 1/1024 (well inside the scene grid 2^-16)
 
 
 def cross(ax, ay, bx, by):
@@ -44,7 +44,7 @@ def material(rng):
 
 
 def general_scene(rng, n, size):
-    """Polygons inscribed in disjoint circles, vertices on the 1/64 grid."""
+    """Polygons inscribed in disjoint circles, vertices on the 1/1024 grid."""
     objs, circles = [], []
     for _ in range(20000):
         if len(objs) == n:
