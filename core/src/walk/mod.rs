@@ -591,7 +591,11 @@ pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
 }
 
 /// Whether the clockwise position `a` comes strictly before `b` (`None`: θ = 2π, the first
-/// angle of its lap going clockwise).
+/// angle of its lap going clockwise). Inlined into the clockwise step (up to three per
+/// step): a call each cost a hall frame 0.6 % more instructions and a mixed one 0.3 %
+/// (since the tree's steps carry no error, `tree::Events`; before, inlining cost the mixed
+/// frame more than it saved).
+#[inline(always)]
 fn cw_before(a: (u8, Option<&KeyedAngle>), b: (u8, Option<&KeyedAngle>)) -> bool {
     use core::cmp::Ordering;
     a.0 < b.0

@@ -679,6 +679,10 @@ struct Events {
     /// Only steps that can change the primary view (tangent vertex ahead of the eye).
     ahead_only: bool,
     over: bool,
+    /// The walker failed, with its only error ([`WalkError::Corrupt`]): kept here, so that
+    /// a step is an `Option` and the error is checked once per cluster (−0.3 %
+    /// instructions in the mixed frame); every later cluster reports it, as the walker would.
+    failed: bool,
 }
 
 /// A cluster: the first and last step on one exact ray (in walk order) and its lap.
@@ -712,34 +716,63 @@ impl Events {
             peek: None,
             ahead_only,
             over: false,
+            failed: false,
         }
     }
 
     /// The next step that counts from the walker (not `peek`), with its exact lap: a step
     /// exactly at θ = 0 that the perturbation puts just below 2π belongs to the next lap.
-    /// Inlined into [`Events::cluster`]'s one call.
+    /// Inlined into [`Events::next_cluster`]'s one call.
     #[inline(always)]
     fn step<S: Storage>(
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
-    ) -> Result<Option<(Step, u8)>, WalkError> {
+    ) -> Option<(Step, u8)> {
         while !self.over {
-            let Some(s) = self.walker.next_step(complex, scene)? else {
-                self.over = true;
-                break;
+            let s = match self.walker.next_step(complex, scene) {
+                Ok(Some(s)) => s,
+                r => {
+                    self.over = true;
+                    self.failed = r.is_err();
+                    break;
+                }
             };
             if s.vertex.is_some() && (s.ahead || !self.ahead_only) {
-                let lap = self.walker.lap() + u8::from(wraps(&s.angle));
-                return Ok(Some((s, lap)));
+                // `wraps` is a call: made only for a step exactly at θ = 0 (−0.1 %
+                // instructions in the hall frame).
+                let at_zero = s.angle.is_exactly_zero() && wraps(&s.angle);
+                let lap = self.walker.lap() + u8::from(at_zero);
+                return Some((s, lap));
             }
         }
-        Ok(None)
+        None
     }
 
     /// The next cluster, written to `out` (two steps with their angles, which every move
     /// copies; kept out of the frames, which it would enlarge); `false` when there is none.
+    #[inline(always)]
     fn cluster<S: Storage>(
+        &mut self,
+        complex: &Complex<S>,
+        scene: &SceneRef<'_>,
+        out: &mut Cluster,
+    ) -> Result<bool, WalkError> {
+        // Over (every walk's last call; no step is peeked then, only while the walker goes
+        // on): no call of the walk's body (−0.6 % instructions in the hall frame, −0.2 % in
+        // mixed).
+        if self.over {
+            return if self.failed {
+                Err(WalkError::Corrupt)
+            } else {
+                Ok(false)
+            };
+        }
+        self.next_cluster(complex, scene, out)
+    }
+
+    /// [`Events::cluster`] while the walk goes on.
+    fn next_cluster<S: Storage>(
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
@@ -760,7 +793,7 @@ impl Events {
         };
         // One call of `step`, inlined: the walker once, without a call per step (−1.2 %
         // instructions in the hall frame).
-        while let Some((s, l)) = self.step(complex, scene)? {
+        while let Some((s, l)) = self.step(complex, scene) {
             if !open {
                 *out = Cluster {
                     first: s,
@@ -774,6 +807,9 @@ impl Events {
                 self.peek = Some((s, l));
                 break;
             }
+        }
+        if self.failed {
+            return Err(WalkError::Corrupt);
         }
         Ok(open)
     }
@@ -4071,5 +4107,39 @@ mod tests {
             }
         }
         assert!(by_arc > 1000 && on_line > 100, "{by_arc} {on_line}");
+    }
+
+    /// A walk's clusters end for good: after the last one every call is `false`, and after
+    /// the walker fails (a walk round and round, past its step bound, as in `walk`'s
+    /// `a_walk_that_does_not_end_is_corrupt`) every call is `Corrupt` — answered without
+    /// the walker once it is over.
+    #[test]
+    fn clusters_stay_ended_and_failed() {
+        use super::{Anchor, Angle, Cluster, Events, Position, Walker};
+        let s = scene(Material::Opaque);
+        let s = s.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        let start = c.trace_start(&s, eye()).unwrap();
+        let out = &mut Cluster::empty();
+        for (lap, last) in [(1, Ok(false)), (u8::MAX, Err(WalkError::Corrupt))] {
+            let end = Position {
+                lap,
+                angle: Angle::ZERO,
+            };
+            let walker = Walker::new(eye(), Anchor::Point, start, Angle::ZERO, Some(end), true);
+            let mut events = Events::new(walker, false);
+            let mut clusters = 0;
+            let ended = loop {
+                match events.cluster(&c, &s, out) {
+                    Ok(true) => clusters += 1,
+                    r => break r,
+                }
+            };
+            assert!(clusters > 4, "{clusters}");
+            for _ in 0..3 {
+                assert_eq!(ended, last);
+                assert_eq!(events.cluster(&c, &s, out), last);
+            }
+        }
     }
 }
