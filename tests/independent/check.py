@@ -2,7 +2,8 @@
 """An independent check of the `vcx` command line, sharing no code with vcx or its tests.
 
 Exact rational arithmetic (`fractions`), brute force, written from the README's definitions
-only. On random scenes of disjoint convex polygons (opaque, mirror, screen) it checks:
+only. On random scenes of disjoint convex polygons (opaque, mirror, refractive, screen) it
+checks:
 
 * `build --stats-json`: `free_bitangents` against a count of the free bitangent segments
   of every pair of objects (scenes in general position; a degenerate scene is not counted,
@@ -11,7 +12,8 @@ only. On random scenes of disjoint convex polygons (opaque, mirror, screen) it c
   screens included, is an object of the complex);
 * `view --depth D --json`, all around and in a field of view (`--from`, `--to`): at random
   directions (away from the printed interval ends) the path of objects against an exact
-  ray tracer (screens transparent, mirrors reflect while the depth lasts).
+  ray tracer by virtual eyes (screens transparent; while the depth lasts, mirrors reflect
+  and refractive objects refract by the tangent law of DESIGN.md, entry and exit).
 
 Two families: `general` (random polygons on the 1/1024 grid) and `lattice` (axis-aligned
 boxes and right triangles on the integer lattice: collinear walls, and viewpoints on
@@ -39,8 +41,14 @@ def strictly_convex(pts):
 
 
 def material(rng):
+    """A material, and for a refractive object its index (k/64, exact in the scene's
+    16 fractional bits)."""
     u = rng.random()
-    return "mirror" if u < 0.3 else ("screen" if u < 0.4 else "opaque")
+    if u < 0.25:
+        return {"material": "mirror"}
+    if u < 0.4:
+        return {"material": "refractive", "eta": F(rng.randint(70, 128), 64)}
+    return {"material": "screen" if u < 0.5 else "opaque"}
 
 
 def general_scene(rng, n, size):
@@ -61,7 +69,7 @@ def general_scene(rng, n, size):
         if len(pts) < 3 or not strictly_convex(pts):
             continue
         circles.append((cx, cy, r + 0.05))  # rounding moves a vertex by < 0.05
-        objs.append({"material": material(rng), "vertices": pts})
+        objs.append(dict(material(rng), vertices=pts))
     return objs
 
 
@@ -81,7 +89,7 @@ def lattice_scene(rng, n, size):
         pts = [(F(x), F(y)), (F(x + w), F(y)), (F(x + w), F(y + h)), (F(x), F(y + h))]
         if rng.random() < 0.3:
             del pts[2]
-        objs.append({"material": material(rng), "vertices": pts})
+        objs.append(dict(material(rng), vertices=pts))
     return objs
 
 
@@ -157,10 +165,30 @@ def free_bitangents(objs):
     return count
 
 
+def foot(ex, ey, a, b):
+    """The foot of the point e on the line ab."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    k = F((ex - a[0]) * dx + (ey - a[1]) * dy) / (dx * dx + dy * dy)
+    return a[0] + k * dx, a[1] + k * dy
+
+
+def edge_at(poly, qx, qy):
+    """The one edge (a, b) of the polygon through q, or None (q at a vertex)."""
+    edges = [(poly[k], poly[(k + 1) % len(poly)]) for k in range(len(poly))
+             if cross(poly[(k + 1) % len(poly)][0] - poly[k][0], poly[(k + 1) % len(poly)][1] - poly[k][1],
+                      qx - poly[k][0], qy - poly[k][1]) == 0]
+    return edges[0] if len(edges) == 1 else None
+
+
 def trace(objs, px, py, dx, dy, depth):
-    """The objects a ray meets: screens are passed, a mirror reflects while the depth
-    lasts, anything else ends it. None if degenerate (a vertex met)."""
+    """The objects a ray from the eye p meets, by virtual eyes: screens are passed; while
+    the depth lasts a mirror reflects the eye across the hit edge, and a refractive object
+    of index η moves it by the tangent law, to F + η(E − F) at the entry edge and
+    F + (E − F)/η at the exit edge (F: the eye's foot on the edge); the ray goes on from
+    the hit through the new eye's direction. Anything else ends the path. None if
+    degenerate (a vertex met)."""
     path, skip = [], None
+    ex, ey = px, py
     for _ in range(depth + 1):
         best, degenerate = first_hit(objs, px, py, dx, dy, skip, transparent=("screen",))
         if degenerate:
@@ -169,19 +197,29 @@ def trace(objs, px, py, dx, dy, depth):
             return path
         t, i = best
         path.append(i)
-        if objs[i]["material"] != "mirror" or len(path) > depth:
+        o = objs[i]
+        if o["material"] not in ("mirror", "refractive") or len(path) > depth:
             return path
         qx, qy = px + t * dx, py + t * dy
-        poly = objs[i]["vertices"]
-        edges = [(poly[(k + 1) % len(poly)][0] - poly[k][0], poly[(k + 1) % len(poly)][1] - poly[k][1])
-                 for k in range(len(poly))
-                 if cross(poly[(k + 1) % len(poly)][0] - poly[k][0], poly[(k + 1) % len(poly)][1] - poly[k][1],
-                          qx - poly[k][0], qy - poly[k][1]) == 0]
-        if len(edges) != 1:
+        edge = edge_at(o["vertices"], qx, qy)
+        if edge is None:
             return None
-        ex, ey = edges[0]
-        k = F(2 * (dx * ex + dy * ey)) / (ex * ex + ey * ey)
-        px, py, dx, dy, skip = qx, qy, k * ex - dx, k * ey - dy, i
+        fx, fy = foot(ex, ey, *edge)
+        k = -1 if o["material"] == "mirror" else o["eta"]
+        ex, ey = fx + k * (ex - fx), fy + k * (ey - fy)
+        px, py, dx, dy, skip = qx, qy, qx - ex, qy - ey, i
+        if o["material"] == "refractive":
+            # Across the object to its exit edge, and out.
+            iv = line_interval(o["vertices"], px, py, dx, dy)
+            if iv is None or iv[1] is None or iv[1] <= 0 or iv[2]:
+                return None
+            qx, qy = px + iv[1] * dx, py + iv[1] * dy
+            edge = edge_at(o["vertices"], qx, qy)
+            if edge is None:
+                return None
+            fx, fy = foot(ex, ey, *edge)
+            ex, ey = fx + (ex - fx) / o["eta"], fy + (ey - fy) / o["eta"]
+            px, py, dx, dy = qx, qy, qx - ex, qy - ey
     return path
 
 
@@ -215,8 +253,8 @@ def check_scene(args, family, seed, tmp, tally):
             for o in objs]
     path = os.path.join(tmp, "%s-%d.json" % (family, seed))
     with open(path, "w") as f:
-        json.dump({"objects": [{"material": o["material"], "vertices": [[float(x), float(y)] for x, y in o["vertices"]]}
-                               for o in objs]}, f)
+        json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
+                                    vertices=[[float(x), float(y)] for x, y in o["vertices"]]) for o in objs]}, f)
     where = "%s scene %d (%s)" % (family, seed, path)
     bad = []
     stats = json.loads(vcx(args.vcx, "build", path, "--stats-json", "--seed", str(seed)))
@@ -273,7 +311,7 @@ def check_views(args, rng, objs, points, views, field, where, tally):
             got = next((iv["path"] for iv in intervals
                         if (iv["start"] <= a < iv["end"] if iv["start"] <= iv["end"] else not iv["end"] <= a < iv["start"])), [])
             tally["view directions"] += 1
-            tally["of them reflected"] += len(want) > 1
+            tally["of them past a mirror or lens"] += len(want) > 1
             if got != want:
                 bad.append("%s: view --at %r,%r --depth %d (field %s) at %.9f rad: %s, expected %s"
                            % (where, float(x), float(y), args.depth, field, a, got, want))
@@ -295,7 +333,7 @@ def main():
     p.add_argument("--samples", type=int, default=40, help="directions per view")
     args = p.parse_args()
     families = ["general", "lattice"] if args.family == "both" else [args.family]
-    tally = {"bitangent counts": 0, "rays located": 0, "view directions": 0, "of them reflected": 0}
+    tally = {"bitangent counts": 0, "rays located": 0, "view directions": 0, "of them past a mirror or lens": 0}
     bad = []
     tmp = tempfile.mkdtemp(prefix="vcx-independent-")
     for family in families:
