@@ -123,30 +123,26 @@ impl Wide {
         Some(())
     }
 
-    /// `self · k` for a magnitude of at most four limbs: its sign (−1, 0, 1) and six
-    /// little-endian limbs of its magnitude (below 2³⁸⁴, no overflow), on the stack.
+    /// `self · k` for a magnitude of at most four limbs: its sign (−1, 0, 1) and five
+    /// little-endian limbs of its magnitude (below 2³²⁰, no overflow), on the stack. One
+    /// pass: `|k| ≤ 2⁶³` is one limb.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
         allow(dead_code)
     )]
     #[inline]
-    fn mul_short(&self, k: i128) -> (i8, [u64; 6]) {
-        let mut mag = [0u64; 6];
+    fn mul_short(&self, k: i64) -> (i8, [u64; 5]) {
+        let mut mag = [0u64; 5];
         let src = self.limbs();
         let km = k.unsigned_abs();
-        for (shift, kl) in [(0, km as u64), (1, (km >> 64) as u64)] {
-            if kl == 0 {
-                continue;
-            }
-            let mut carry = 0u64;
-            for (slot, &l) in mag.iter_mut().skip(shift).zip(src) {
-                let acc = u128::from(l) * u128::from(kl) + u128::from(*slot) + u128::from(carry);
-                *slot = acc as u64;
-                carry = (acc >> 64) as u64;
-            }
-            if let Some(slot) = mag.get_mut(src.len() + shift) {
-                *slot = carry;
-            }
+        let mut carry = 0u64;
+        for (slot, &l) in mag.iter_mut().zip(src) {
+            let acc = u128::from(l) * u128::from(km) + u128::from(carry);
+            *slot = acc as u64;
+            carry = (acc >> 64) as u64;
+        }
+        if let Some(slot) = mag.get_mut(src.len()) {
+            *slot = carry;
         }
         let sign = if self.len == 0 || k == 0 {
             0
@@ -273,10 +269,15 @@ impl Wide {
         allow(dead_code)
     )]
     pub(crate) fn cross_sign(u: &(Wide, Wide), v: (i128, i128)) -> Option<Sign> {
-        // The common case (a range end mapped through one hop, against a query difference):
-        // both products within six limbs, compared without forming `Wide`s.
-        if u.0.len <= 4 && u.1.len <= 4 {
-            let (p, q) = (u.0.mul_short(v.1), u.1.mul_short(v.0));
+        // The common case (a range end mapped through one hop, against a query difference,
+        // an `i64` widened): both products within five limbs, compared without forming
+        // `Wide`s.
+        let short = match (i64::try_from(v.0), i64::try_from(v.1)) {
+            (Ok(v0), Ok(v1)) if u.0.len <= 4 && u.1.len <= 4 => Some((v0, v1)),
+            _ => None,
+        };
+        if let Some((v0, v1)) = short {
+            let (p, q) = (u.0.mul_short(v1), u.1.mul_short(v0));
             return Some(match p.0.cmp(&q.0) {
                 Ordering::Greater => Sign::Positive,
                 Ordering::Less => Sign::Negative,
@@ -626,7 +627,37 @@ mod tests {
                 "round {round}"
             );
         }
-        // Zero products, and factors past 64 bits, in the short path.
+        // The short path: four-limb magnitudes times `i64` factors up to `i64::MIN`, with
+        // products equal in their top limbs (`u.1 = u.0 + d`, `v.0 = v.1`) or carries apart.
+        let mut next = xorshift(0x0fed_cba9_8765_4321u64);
+        let mut wide = |bits: u64| {
+            let r = |x: u64| ((u128::from(x) << 64 | u128::from(x.rotate_left(17))) >> 1) as i128;
+            let (a, b) = (r(next()) >> (bits % 127), r(next()));
+            let sign = if next().is_multiple_of(2) { 1 } else { -1 };
+            w(a).mul_i128(b * sign).unwrap_or(w(a))
+        };
+        let ends = [i64::MIN, i64::MIN + 1, -1, 0, 1, i64::MAX];
+        for round in 0..4000u64 {
+            let a = wide(round);
+            let k = ends
+                .get(round as usize % 8)
+                .copied()
+                .unwrap_or(round.wrapping_mul(0x9e37_79b9_7f4a_7c15) as i64);
+            let (u, v) = match round % 4 {
+                0 => ((a, a.add(&w(i128::from(round as i8))).unwrap_or(a)), (k, k)),
+                1 => ((a, wide(round / 3)), (k, k / 3)),
+                2 => ((a.neg(), a), (k, -k.wrapping_add(1))),
+                _ => ((wide(round + 1), a), (k, i64::MAX)),
+            };
+            let v = (i128::from(v.0), i128::from(v.1));
+            let plain = u.0.mul_i128(v.1).and_then(|p| p.sub(&u.1.mul_i128(v.0)?));
+            assert_eq!(
+                Wide::cross_sign(&u, v),
+                plain.map(|c| c.sign()),
+                "round {round}"
+            );
+        }
+        // Zero products in the short path, and factors past 64 bits.
         let h = 1i128 << 100;
         for (u, v) in [
             ((w(0), w(5)), (3, 0)),
