@@ -211,21 +211,17 @@ pub fn tangents_from(
     };
     // Vertex k is a tangent where the signs of edges k − 1 and k differ; the line lies on
     // the lower chain if the object is on its left. Found in index order, vertex 0 first.
-    let mut tangent = |k: usize, prev: Sign, sn: Sign| {
-        if prev.flip() == sn {
-            let bound = if sn == Sign::Positive {
-                Bound::Lower
-            } else {
-                Bound::Upper
-            };
-            if let Some(slot) = out.get_mut(found) {
-                *slot = (first + k, bound);
-                found += 1;
-            }
-        }
+    let tangent = |k: usize, prev: Sign, sn: Sign| {
+        let bound = if sn == Sign::Positive {
+            Bound::Lower
+        } else {
+            Bound::Upper
+        };
+        (prev.flip() == sn).then_some((first + k, bound))
     };
     // The closing edge (n − 1) → 0 first, then 0 → 1, …, (n − 2) → (n − 1): every edge
-    // computed once.
+    // computed once, and none after the second tangent (a convex object has no more, and
+    // only the first two are kept).
     let last = vertices.len() - 1;
     let w0 = rel(v0);
     let closing = edge(last, rel(vl), 0, w0);
@@ -233,11 +229,22 @@ pub fn tangents_from(
     for (k, v) in vertices.iter().enumerate().skip(1) {
         let wn = rel(v);
         let sn = edge(k - 1, wk, k, wn);
-        tangent(k - 1, prev, sn);
+        if let Some(t) = tangent(k - 1, prev, sn) {
+            if let Some(slot) = out.get_mut(found) {
+                *slot = t;
+                found += 1;
+            }
+            if found == out.len() {
+                return (out, found);
+            }
+        }
         prev = sn;
         wk = wn;
     }
-    tangent(last, prev, closing);
+    if let (Some(t), Some(slot)) = (tangent(last, prev, closing), out.get_mut(found)) {
+        *slot = t;
+        found += 1;
+    }
     (out, found)
 }
 
