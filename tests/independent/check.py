@@ -11,21 +11,23 @@ checks:
 * `locate --json`: the objects ahead and behind against exact ray shooting (every object,
   screens included, is an object of the complex);
 * `view --depth D --json`, all around and in a field of view (`--from`, `--to`): at random
-  directions (away from the printed interval ends) the path of objects against an exact
-  ray tracer by virtual eyes (screens transparent; while the depth lasts, mirrors reflect
-  and refractive objects refract by the tangent law of DESIGN.md, entry and exit).
+  directions, and 10⁻⁶ rad either side of printed interval ends, the path of objects
+  against an exact ray tracer by virtual eyes (screens transparent; while the depth lasts,
+  mirrors reflect and refractive objects refract by the tangent law of DESIGN.md, entry
+  and exit);
+* `build --region` on an all-opaque copy of the scene: views from inside the box (its
+  free corners included) from the file, the same way.
 
-Two families: `general` (random polygons on the 1/1024 grid) and `lattice` (axis-aligned
-boxes and right triangles on the integer lattice: collinear walls, and viewpoints on
-half-integer points, so on edge extensions and bitangents). Exit status 1 on any
-disagreement, each printed on one line.
+Two families: `general` (random polygons on the 1/1024 grid, or `--grid 65536`: the scene
+grid itself) and `lattice` (axis-aligned boxes and right triangles on the integer
+lattice: collinear walls, and viewpoints on half-integer points, so on edge extensions and
+bitangents). Exit status 1 on any disagreement, each printed on one line.
 
     python3 tests/independent/check.py --vcx target/release/vcx --scenes 20
 """
 import argparse, json, math, os, random, shutil, subprocess, sys, tempfile
 from fractions import Fraction as F
 
-GRID = 1024  # the general family's coordinate grid: 1/1024 (well inside the scene grid 2^-16)
 
 
 def cross(ax, ay, bx, by):
@@ -51,8 +53,8 @@ def material(rng):
     return {"material": "screen" if u < 0.5 else "opaque"}
 
 
-def general_scene(rng, n, size):
-    """Polygons inscribed in disjoint circles, vertices on the 1/1024 grid."""
+def general_scene(rng, n, size, grid):
+    """Polygons inscribed in disjoint circles, vertices on the 1/grid grid."""
     objs, circles = [], []
     for _ in range(20000):
         if len(objs) == n:
@@ -63,7 +65,7 @@ def general_scene(rng, n, size):
             continue
         pts = []
         for a in sorted(rng.uniform(0, 2 * math.pi) for _ in range(rng.randint(3, 7))):
-            p = (F(round((cx + r * math.cos(a)) * GRID), GRID), F(round((cy + r * math.sin(a)) * GRID), GRID))
+            p = (F(round((cx + r * math.cos(a)) * grid), grid), F(round((cy + r * math.sin(a)) * grid), grid))
             if p not in pts:
                 pts.append(p)
         if len(pts) < 3 or not strictly_convex(pts):
@@ -73,7 +75,7 @@ def general_scene(rng, n, size):
     return objs
 
 
-def lattice_scene(rng, n, size):
+def lattice_scene(rng, n, size, grid):
     """Boxes and right triangles on the integer lattice, at least one unit apart."""
     objs, boxes = [], []
     size = int(size)
@@ -223,17 +225,28 @@ def trace(objs, px, py, dx, dy, depth):
     return path
 
 
-def free_point(rng, objs, size, lattice, scale):
+def free_point(rng, objs, args, lattice):
+    size, grid = args.size, args.grid
     while True:
         if lattice:
             x, y = F(rng.randint(0, 2 * int(size)), 2), F(rng.randint(0, 2 * int(size)), 2)
         else:
-            x, y = F(round(rng.uniform(0, size) * GRID), GRID), F(round(rng.uniform(0, size) * GRID), GRID)
-        x, y = (x - F(size) / 2) * scale, (y - F(size) / 2) * scale
-        ivs = [line_interval(o["vertices"], x, y, F(1), F(0)) for o in objs]
-        if not any(iv is not None and (iv[0] is None or iv[0] <= 0) and (iv[1] is None or iv[1] >= 0)
-                   for iv in ivs):
+            x, y = F(round(rng.uniform(0, size) * grid), grid), F(round(rng.uniform(0, size) * grid), grid)
+        x, y = place(args, x, y)
+        if is_free(objs, x, y):
             return x, y
+
+
+def is_free(objs, x, y):
+    """Whether the point is outside every object (boundaries included)."""
+    ivs = [line_interval(o["vertices"], x, y, F(1), F(0)) for o in objs]
+    return not any(iv is not None and (iv[0] is None or iv[0] <= 0) and (iv[1] is None or iv[1] >= 0) for iv in ivs)
+
+
+def place(args, x, y):
+    """A point of the scene box moved to its place: centred on `--centre`, scaled."""
+    half = F(args.size) / 2
+    return (x - half) * args.scale + args.centre[0], (y - half) * args.scale + args.centre[1]
 
 
 def vcx(binary, *args):
@@ -246,11 +259,9 @@ def vcx(binary, *args):
 def check_scene(args, family, seed, tmp, tally):
     rng = random.Random("%s %d" % (family, seed))
     lattice = family == "lattice"
-    objs = (lattice_scene if lattice else general_scene)(rng, args.objects, args.size)
-    # Centred on the origin and scaled (--scale 1000: near the top of the coordinate range).
-    half = F(args.size) / 2
-    objs = [dict(o, vertices=[((x - half) * args.scale, (y - half) * args.scale) for x, y in o["vertices"]])
-            for o in objs]
+    objs = (lattice_scene if lattice else general_scene)(rng, args.objects, args.size, args.grid)
+    # Near the top of the coordinate range: --scale 1000, or --centre 16000,-16000.
+    objs = [dict(o, vertices=[place(args, x, y) for x, y in o["vertices"]]) for o in objs]
     path = os.path.join(tmp, "%s-%d.json" % (family, seed))
     with open(path, "w") as f:
         json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
@@ -266,7 +277,7 @@ def check_scene(args, family, seed, tmp, tally):
     if stats["complex_vertices"] != 2 * stats["free_bitangents"]:
         bad.append("%s: complex_vertices %d is not 2 × free_bitangents" % (where, stats["complex_vertices"]))
     for _ in range(args.rays):
-        x, y = free_point(rng, objs, args.size, lattice, args.scale)
+        x, y = free_point(rng, objs, args, lattice)
         dx, dy = rng.randint(-1000, 1000), rng.randint(-1000, 1000)
         ahead, d1 = first_hit(objs, x, y, F(dx), F(dy))
         behind, d2 = first_hit(objs, x, y, F(-dx), F(-dy))
@@ -279,7 +290,7 @@ def check_scene(args, family, seed, tmp, tally):
         if (out["forward"], out["backward"]) != want:
             bad.append("%s: locate --at %r,%r --dir %d,%d: (%s, %s), expected %s"
                        % (where, float(x), float(y), dx, dy, out["forward"], out["backward"], want))
-    points = [free_point(rng, objs, args.size, lattice, args.scale) for _ in range(args.views)]
+    points = [free_point(rng, objs, args, lattice) for _ in range(args.views)]
     at = os.path.join(tmp, "%s-%d.txt" % (family, seed))
     with open(at, "w") as f:
         f.writelines("%r,%r\n" % (float(x), float(y)) for x, y in points)
@@ -290,7 +301,37 @@ def check_scene(args, family, seed, tmp, tally):
         extra = [] if field is None else ["--from", str(field[0]), "--to", str(field[1] % 360)]
         views = vcx(args.vcx, "view", path, "--at-file", at, "--depth", str(args.depth), "--json", *extra)
         bad += check_views(args, rng, objs, points, views.splitlines(), field, where, tally)
-    return bad
+    return bad + check_region(args, rng, objs, lattice, tmp, where, tally)
+
+
+def check_region(args, rng, objs, lattice, tmp, where, tally):
+    """`build --region`: the same scene, all opaque (regions refuse ray trees), kept for a
+    box of a third of the scene's side; views from inside the box (its corners included
+    when free) against exact ray shooting."""
+    side = F(args.size) / 3
+    x0, y0 = (F(rng.randint(0, int(2 * side))) for _ in range(2))
+    (bx0, by0), (bx1, by1) = place(args, x0, y0), place(args, x0 + side, y0 + side)
+    opaque = [dict(o, material="opaque") for o in objs]
+    path = os.path.join(tmp, "region.json")
+    with open(path, "w") as f:
+        json.dump({"objects": [{"material": "opaque", "vertices": [[float(x), float(y)] for x, y in o["vertices"]]}
+                               for o in opaque]}, f)
+    box = "%r,%r,%r,%r" % (float(bx0), float(by0), float(bx1), float(by1))
+    out = os.path.join(tmp, "region.vcx")
+    vcx(args.vcx, "build", path, "--region", box, "-o", out)
+    points = [(x, y) for x, y in ((bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1)) if is_free(opaque, x, y)]
+    for _ in range(10000):
+        if len(points) >= args.views:
+            break
+        x, y = free_point(rng, opaque, args, lattice)
+        if bx0 <= x <= bx1 and by0 <= y <= by1:
+            points.append((x, y))
+    at = os.path.join(tmp, "region.txt")
+    with open(at, "w") as f:
+        f.writelines("%r,%r\n" % (float(x), float(y)) for x, y in points)
+    views = vcx(args.vcx, "view", out, "--at-file", at, "--json").splitlines()
+    tally["region viewpoints"] += len(points)
+    return check_views(args, rng, opaque, points, views, None, where + " --region " + box, tally)
 
 
 def check_views(args, rng, objs, points, views, field, where, tally):
@@ -300,8 +341,15 @@ def check_views(args, rng, objs, points, views, field, where, tally):
     for (x, y), line in zip(points, views):
         intervals = json.loads(line)["intervals"]
         ends = [e for iv in intervals for e in (iv["start"], iv["end"])]
-        for _ in range(args.samples):
-            a = rng.uniform(0, 2 * math.pi) if field is None else math.radians(rng.uniform(*field)) % (2 * math.pi)
+        # Random directions, and both sides of some printed ends (1e-6 rad away): an end
+        # out of place by more than that is seen on one side.
+        near = [e + s for e in rng.sample(ends, min(len(ends), args.samples // 2)) for s in (-1e-6, 1e-6)]
+        randoms = (rng.uniform(0, 2 * math.pi) if field is None else math.radians(rng.uniform(*field))
+                   for _ in range(args.samples))
+        for a, beside in [(a, False) for a in randoms] + [(a, True) for a in near]:
+            a %= 2 * math.pi
+            if field is not None and (a - math.radians(field[0])) % (2 * math.pi) > math.radians(field[1] - field[0]):
+                continue  # beside an end of the field, outside it
             # Printed ends are rounded: a sample that close to one is not decided by them.
             if any(abs(math.remainder(a - e, 2 * math.pi)) < 1e-7 for e in ends):
                 continue
@@ -311,6 +359,7 @@ def check_views(args, rng, objs, points, views, field, where, tally):
             got = next((iv["path"] for iv in intervals
                         if (iv["start"] <= a < iv["end"] if iv["start"] <= iv["end"] else not iv["end"] <= a < iv["start"])), [])
             tally["view directions"] += 1
+            tally["of them beside an interval end"] += beside
             tally["of them past a mirror or lens"] += len(want) > 1
             if got != want:
                 bad.append("%s: view --at %r,%r --depth %d (field %s) at %.9f rad: %s, expected %s"
@@ -326,14 +375,20 @@ def main():
     p.add_argument("--seed", type=int, default=0, help="first scene seed")
     p.add_argument("--objects", type=int, default=20)
     p.add_argument("--size", type=int, default=30, help="side of the scene box, centred on the origin")
-    p.add_argument("--scale", type=int, default=1, help="scale factor of every coordinate (|x|, |y| ≤ scale × size / 2 must stay below 16384)")
+    p.add_argument("--scale", type=int, default=1, help="scale factor of every coordinate")
+    p.add_argument("--centre", default="0,0", help="X,Y: integer centre of the scene box (|centre| + scale × size / 2 must stay below 16384)")
+    p.add_argument("--grid", type=int, default=1024, help="the general family's grid: 1/GRID units, a power of two up to 65536 (the scene grid)")
     p.add_argument("--depth", type=int, default=4)
     p.add_argument("--rays", type=int, default=20, help="located rays per scene")
     p.add_argument("--views", type=int, default=8, help="viewpoints per scene")
     p.add_argument("--samples", type=int, default=40, help="directions per view")
     args = p.parse_args()
+    args.centre = tuple(int(c) for c in args.centre.split(","))
+    if 65536 % args.grid or max(map(abs, args.centre)) + args.scale * args.size / 2 >= 16384:
+        p.error("--grid must divide 65536, and the scene must stay within |x|, |y| < 16384")
     families = ["general", "lattice"] if args.family == "both" else [args.family]
-    tally = {"bitangent counts": 0, "rays located": 0, "view directions": 0, "of them past a mirror or lens": 0}
+    tally = {"bitangent counts": 0, "rays located": 0, "view directions": 0, "of them beside an interval end": 0,
+             "of them past a mirror or lens": 0, "region viewpoints": 0}
     bad = []
     tmp = tempfile.mkdtemp(prefix="vcx-independent-")
     for family in families:
