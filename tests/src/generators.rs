@@ -1453,18 +1453,27 @@ pub fn restricted(full: &[TreeInterval], from: Direction, to: Direction) -> Opti
     // The interval containing `from`: one starting on it, else the one starting last
     // before it (counter-clockwise from `from`, the largest position).
     let key = |p: &Pos| match p {
-        _ if at_from(p) => tau,
-        // The lap is exact: an `f64` tie with `from` goes to the right side.
-        Pos::Exact(l, a) => match ((a.radians() - fr).rem_euclid(tau), l) {
-            (r, 0) if r > tau - 1e-9 => 0.0,
-            (r, 1) if r < 1e-9 => tau,
-            (r, _) => r,
-        },
+        Pos::Exact(l, a) => {
+            let ar = a.radians();
+            // Within rounding of `from` itself the exact lap decides the side. (A start
+            // across θ = 0 from `from`, a few 10⁻¹⁰ rad ahead, is no tie: its radians
+            // differ from `from`'s by about 2π.)
+            match (ar - fr).abs() < 1e-9 {
+                true if *l == 0 => 0.0,
+                true => tau,
+                false => (ar - fr).rem_euclid(tau),
+            }
+        }
         Pos::Rel(r) => *r,
+    };
+    // Exact positions compare exactly, by lap and angle.
+    let order = |a: &Pos, b: &Pos| match (a, b) {
+        (Pos::Exact(la, a), Pos::Exact(lb, b)) => la.cmp(lb).then_with(|| a.cmp_exact(b)),
+        _ => key(a).total_cmp(&key(b)),
     };
     let k0 = match pos.iter().position(at_from) {
         Some(k) => k,
-        None => (0..full.len()).max_by(|&a, &b| key(&pos[a]).total_cmp(&key(&pos[b])))?,
+        None => (0..full.len()).max_by(|&a, &b| order(&pos[a], &pos[b]))?,
     };
     let on_from = at_from(&pos[k0]);
     let mut rows = vec![(

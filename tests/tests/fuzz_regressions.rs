@@ -42,6 +42,7 @@ const RUST_INPUTS: &[(&str, &str)] = &[
     ("ray_tree", "thin_interval_below_2pi.rs"),
     ("ray_tree", "spurious_sliver_diagonal.rs"),
     ("ray_tree", "no_start_refracted_end_off_edge.rs"),
+    ("ray_tree", "far_eye_range_across_zero.rs"),
 ];
 
 fn dir(target: &str) -> PathBuf {
@@ -422,4 +423,11 @@ fn printed_inputs_are_rust() {
             (Edge(5), true, 0),
         ],
     });
+}
+
+#[test]
+fn ray_tree_far_eye_range_across_zero() {
+    let input: RayTreeInput =
+        include!("../../fuzz/regressions/ray_tree/far_eye_range_across_zero.rs");
+    assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
 }

@@ -192,8 +192,12 @@ pub(super) fn polygon(
         .sum();
     // A curve whose corners all turn one way is not "not convex" even if its loops give
     // the other area sign (a self-intersecting star): the winding count below names it.
-    let first_turn = corners(pts).next().map(|(p, v, q)| orient(p, v, q));
-    let uniform = corners(pts).all(|(p, v, q)| Some(orient(p, v, q)) == first_turn);
+    // Collinear corners do not count here: they are reported as such.
+    let mut turns = corners(pts)
+        .map(|(p, v, q)| orient(p, v, q))
+        .filter(|&s| s != Sign::Zero);
+    let first_turn = turns.next();
+    let uniform = turns.all(|s| Some(s) == first_turn);
     let turn = match first_turn {
         Some(t) if uniform => t,
         _ if twice_area < 0 => Sign::Negative,
@@ -549,6 +553,16 @@ mod tests {
             Err(SceneError::CollinearVertices {
                 object: 3,
                 vertex: 0
+            })
+        );
+        // Every other corner turns clockwise, with a positive area (the loop winds
+        // twice): no corner is reflex, the spike at vertex 5 is what is wrong (fuzz
+        // regression `build_complex/clockwise_spike`).
+        assert_eq!(
+            one(&[(110, 0), (42, -1), (-1, 38), (0, 42), (1, 0), (0, 0)]),
+            Err(SceneError::CollinearVertices {
+                object: 3,
+                vertex: 5
             })
         );
     }
