@@ -376,7 +376,7 @@ def main():
     p.add_argument("--objects", type=int, default=20)
     p.add_argument("--size", type=int, default=30, help="side of the scene box, centred on the origin")
     p.add_argument("--scale", type=int, default=1, help="scale factor of every coordinate")
-    p.add_argument("--centre", default="0,0", help="X,Y: integer centre of the scene box (|centre| + scale × size / 2 must stay below 16384)")
+    p.add_argument("--centre", default="0,0", help="X,Y: integer centre of the scene box (write --centre=-X,Y for a negative X; |centre| + scale × size / 2 must stay below 16384)")
     p.add_argument("--grid", type=int, default=1024, help="the general family's grid: 1/GRID units, a power of two up to 65536 (the scene grid)")
     p.add_argument("--depth", type=int, default=4)
     p.add_argument("--rays", type=int, default=20, help="located rays per scene")

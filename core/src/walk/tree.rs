@@ -2585,7 +2585,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return Ok(());
             }
         }
-        let d = end.angle.vector();
+        // Kept in `i64` as well: the exact products below take `i64` factors.
+        let d64 = end.angle.vector64().ok_or(WalkError::Corrupt)?;
+        let d = (i128::from(d64.0), i128::from(d64.1));
         let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
         let e = diff(b, a);
         let den = cross(d, e);
@@ -2615,7 +2617,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         // direction keeps `f64` precision instead of the query grid's, so that a range far
         // thinner than a grid step at the edge keeps its two ends apart.
         let t = to_f64(num) / to_f64(den);
-        let pn = diff(hop.prev, hop.next);
+        let pn64 = diff64(hop.prev, hop.next);
+        let pn = (i128::from(pn64.0), i128::from(pn64.1));
         let (fx, fy) = (
             to_f64(pn.0) + t * to_f64(d.0),
             to_f64(pn.1) + t * to_f64(d.1),
@@ -2680,13 +2683,13 @@ impl<S: Storage> Tree<'_, '_, S> {
                 out.1 = Wide::from_i128(s * (den1 * pn.1 + num1 * d.1));
                 true
             }
-            // Two products each of an `i128` and an `i64` (`pn` and `d` are `i64`s widened),
+            // Two products each of an `i128` and an `i64` (`pn` and `d` in `i64`),
             // below 2¹⁹¹ (`scaled_hit` without its general loops), scaled by `|den|`: a
             // negative `den` negates both `i128` factors (`|den|, |num| < 2¹¹⁰`).
             None => {
                 let (den, num) = if den < 0 { (-den, -num) } else { (den, num) };
-                Wide::mul2_into(den, pn.0 as i64, num, d.0 as i64, &mut out.0);
-                Wide::mul2_into(den, pn.1 as i64, num, d.1 as i64, &mut out.1);
+                Wide::mul2_into(den, pn64.0, num, d64.0, &mut out.0);
+                Wide::mul2_into(den, pn64.1, num, d64.1, &mut out.1);
                 true
             }
         };
@@ -2947,14 +2950,21 @@ impl<S: Storage> Tree<'_, '_, S> {
     ) -> Option<FacingEdge> {
         let o = self.scene.object(m)?;
         let (f, n) = (o.first_vertex(), o.len());
-        // Products of `i64`s: a difference below 2⁵³ times a component below 2⁶³.
-        let d = a.vector();
-        let side = |p: &Point| cross(diff(p.to_query(), eye), d);
+        // `cross(p − eye, d)`, negated: products of `i64`s, a difference below 2⁵³ times a
+        // component below 2⁶³.
+        let d = a.vector64()?;
+        let side = |p: &Point| {
+            let p = p.to_query();
+            -offset_cross(d, p.x() - eye.x(), p.y() - eye.y())
+        };
         let outline = self.scene.vertices().get(f..f + n)?;
-        let first = side(outline.first()?);
+        let (head, rest) = outline.split_first()?;
+        let first = side(head);
         let mut s = first;
-        let next = outline.iter().skip(1).map(side).chain([first]);
-        for (k, t) in next.enumerate() {
+        // Edge `k` runs from vertex `k` to `k + 1`, the last one back to the first (this
+        // loop, not `skip` and a chained side: −0.15 % instructions in the mixed frame).
+        for (k, p) in rest.iter().map(Some).chain([None]).enumerate() {
+            let t = p.map_or(first, side);
             // Its ends counter-clockwise from the eye (as `facing` orders them) right of
             // the ray or on it, then left of it or on it.
             let (s0, s1) = if front { (t, s) } else { (s, t) };
@@ -3348,7 +3358,13 @@ fn cross(u: (i128, i128), v: (i128, i128)) -> i128 {
 /// `p − e`, subtracted in 64 bits (query coordinates are at most 2⁵² in magnitude): the
 /// compiler then knows the values fit in 64 bits and multiplies them as such.
 fn diff(p: QueryPoint, e: QueryPoint) -> (i128, i128) {
-    (i128::from(p.x() - e.x()), i128::from(p.y() - e.y()))
+    let (x, y) = diff64(p, e);
+    (i128::from(x), i128::from(y))
+}
+
+/// [`diff`] kept in `i64` (below 2⁵³ in magnitude), for `i64` factors.
+fn diff64(p: QueryPoint, e: QueryPoint) -> (i64, i64) {
+    (p.x() - e.x(), p.y() - e.y())
 }
 
 /// Whether a ray tree looks past an object of `material` with `depth` levels left: always
