@@ -1903,7 +1903,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 if let Some((id, c)) = id.and_then(|id| Some((id, self.complex.cylinder(id)?))) {
                     if c.floor.is_none()
                         && c.ceiling.is_none()
-                        && self.contains_after(q, f, c, true, &[])
+                        && self.contains_after(q, f, (id, c), true, &[])
                     {
                         return (id, *f);
                     }
@@ -1937,12 +1937,16 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return None;
             }
             let Some(t) = c.top else {
-                return self.contains_after(q, f, c, true, &[crossed]).then_some(id);
+                return self
+                    .contains_after(q, f, (id, c), true, &[crossed])
+                    .then_some(id);
             };
             let side = self.arc_after(q, f, (id, t, true), true);
             if side == Sign::Positive {
                 let known = [crossed, (t, side)];
-                return self.contains_after(q, f, c, true, &known).then_some(id);
+                return self
+                    .contains_after(q, f, (id, c), true, &known)
+                    .then_some(id);
             }
             crossed = (t, side);
             // Above a lower chain its object is crossed before `g`: the layer starting
@@ -2067,7 +2071,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let slot = floors.get_mut(m.0 as usize % FLOOR_HINTS).filter(|_| hint);
         let hint = slot.as_ref().and_then(|s| **s).and_then(|(o, id)| {
             let c = self.complex.cylinder(id)?;
-            (o == m && c.floor == Some(m) && self.contains_after(eye, angle, c, ccw, &[]))
+            (o == m && c.floor == Some(m) && self.contains_after(eye, angle, (id, c), ccw, &[]))
                 .then_some(id)
         });
         let id = match hint {
@@ -2128,24 +2132,27 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// it; a wall exactly at θ = 0 that the perturbation puts just below 2π counts as 2π,
     /// and the line just before exactly θ = 0 lies below 2π, after every other wall.
     /// `known` holds chains whose [`Tree::chain_after`] the caller has already computed.
+    /// The walls are tested first: past them `from` lies in `c`'s closed θ-range, where
+    /// the arcs' sides are [`Tree::arc_after`]'s (one cross product at an arc vertex).
     fn contains_after(
         &self,
         eye: QueryPoint,
         from: &Angle,
-        c: &Cylinder,
+        (id, c): (CylinderId, &Cylinder),
         ccw: bool,
         known: &[(Chain, Sign)],
     ) -> bool {
-        let chain_side = |ch: Chain| {
-            known
-                .iter()
-                .find(|(k, _)| *k == ch)
-                .map_or_else(|| self.chain_after(eye, from, ch, ccw), |&(_, s)| s)
+        let chain_side = |ch: Chain, top: bool| {
+            known.iter().find(|(k, _)| *k == ch).map_or_else(
+                || self.arc_after(eye, from, (id, ch, top), ccw),
+                |&(_, s)| s,
+            )
         };
         self.wall_after(from, c.left, true, ccw)
             && self.wall_after(from, c.right, false, ccw)
-            && c.bottom.is_none_or(|b| chain_side(b) == Sign::Negative)
-            && c.top.is_none_or(|t| chain_side(t) == Sign::Positive)
+            && c.bottom
+                .is_none_or(|b| chain_side(b, false) == Sign::Negative)
+            && c.top.is_none_or(|t| chain_side(t, true) == Sign::Positive)
     }
 
     /// Whether the line through the eye just after `from` (`ccw`, else just before it)
@@ -2290,7 +2297,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                         return self.wall_after(from, w, left, ccw).then_some(id);
                     }
                     let known = [crossed, next_side.unwrap_or(crossed)];
-                    return self.contains_after(eye, from, c, ccw, &known).then_some(id);
+                    return self
+                        .contains_after(eye, from, (id, c), ccw, &known)
+                        .then_some(id);
                 }
             }
             // Beyond a chain whose object lies on the far side (above a lower chain, below
@@ -2335,8 +2344,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             .cylinders()
             .iter()
             .enumerate()
-            .find(|(_, c)| c.floor == Some(m) && self.contains_after(eye, from, c, ccw, &[]))
-            .and_then(|(i, _)| CylinderId::from_index(i))
+            .find_map(|(i, c)| {
+                let id = CylinderId::from_index(i)?;
+                (c.floor == Some(m) && self.contains_after(eye, from, (id, c), ccw, &[]))
+                    .then_some(id)
+            })
             .ok_or(WalkError::NoStart)
     }
 }
@@ -3832,7 +3844,8 @@ mod tests {
     /// sides by bounding box, arc vertex or the floor's extremes, one wall tested) is the
     /// one the scan with the full containment test finds, for eyes on the lines of walls
     /// (openings exactly at a wall's angle, through one of its vertices) and elsewhere; and
-    /// a chain's side (`Tree::chain_after`) is the side of its extreme vertex line.
+    /// a chain's side (`Tree::chain_after`) is the side of its extreme vertex line; the
+    /// containment test (`Tree::contains_after`) reads the same with arc vertices as without.
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     #[test]
     fn stack_floor_is_the_scans() {
@@ -3848,7 +3861,17 @@ mod tests {
             complex: &c,
             scene: &s,
         };
-        let (mut climbed, mut at_wall) = (0, 0);
+        // The containment test without arc vertices reads every chain's vertices.
+        let with = c.as_slices();
+        let without = crate::partition::Complex {
+            borders: with.borders_ref().without_arcs(),
+            ..with.clone()
+        };
+        let plain = Tree {
+            complex: &without,
+            scene: &s,
+        };
+        let (mut climbed, mut at_wall, mut inside) = (0, 0, 0);
         for (q, hs) in wall_eyes(&c, &s, 2, 5) {
             for h in hs {
                 let a = Angle::from_query(q, ranked(&s, h));
@@ -3872,6 +3895,13 @@ mod tests {
                         let side = tree.chain_after(q, &a, chain, ccw);
                         assert_eq!(side == some, any, "{q:?} {a:?} {chain:?}");
                     }
+                    for (i, cyl) in c.cylinders().iter().enumerate() {
+                        let id = crate::partition::CylinderId::from_index(i).unwrap();
+                        let fast = tree.contains_after(q, &a, (id, cyl), ccw, &[]);
+                        let full = plain.contains_after(q, &a, (id, cyl), ccw, &[]);
+                        assert_eq!(fast, full, "{q:?} {a:?} {id:?}");
+                        inside += usize::from(fast);
+                    }
                     let Some(id) = tree.stack_floor(q, m, &a, ccw) else {
                         continue;
                     };
@@ -3887,6 +3917,7 @@ mod tests {
             }
         }
         assert!(climbed > 1000 && at_wall > 100, "{climbed} {at_wall}");
+        assert!(inside > 1000, "{inside}");
     }
 
     /// The angle an anchored walk starts from (`Tree::locate_floor`) is the last tangent in
