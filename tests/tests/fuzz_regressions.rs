@@ -43,6 +43,7 @@ const RUST_INPUTS: &[(&str, &str)] = &[
     ("ray_tree", "spurious_sliver_diagonal.rs"),
     ("ray_tree", "no_start_refracted_end_off_edge.rs"),
     ("ray_tree", "far_eye_range_across_zero.rs"),
+    ("ray_tree", "no_start_range_near_glass_vertex.rs"),
 ];
 
 fn dir(target: &str) -> PathBuf {
@@ -429,5 +430,12 @@ fn printed_inputs_are_rust() {
 fn ray_tree_far_eye_range_across_zero() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/far_eye_range_across_zero.rs");
+    assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
+}
+
+#[test]
+fn ray_tree_no_start_range_near_glass_vertex() {
+    let input: RayTreeInput =
+        include!("../../fuzz/regressions/ray_tree/no_start_range_near_glass_vertex.rs");
     assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
 }

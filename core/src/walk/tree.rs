@@ -2537,6 +2537,14 @@ impl RangeWalk {
                         if fresh {
                             out.from = self.cur_from.clone();
                         }
+                    } else {
+                        // Between the rounded and the exact start: the event is a closer
+                        // rounding of it, one where a walk behind this piece finds the
+                        // object it sees (`no_start_range_near_glass_vertex.rs`).
+                        self.cur_from.angle = c.last.angle;
+                        if fresh {
+                            out.from.angle = c.last.angle;
+                        }
                     }
                 } else if after != self.seen {
                     let from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
