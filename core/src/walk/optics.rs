@@ -56,10 +56,10 @@ fn div_rem(x: i128, d: i128) -> (i128, i128) {
 
 /// Euclidean [`div_rem`] by a positive `d < 2⁶³` without the software `i128` division: the
 /// quotient estimated in `f64` and corrected by the exact remainder (`|q·d| < 2¹²⁵`, and
-/// `x − q·d` is within a few `d`: no overflow). The estimate is off by about `|q|·2⁻⁵¹ + 2¹¹/d` units
-/// (the low half's rounding is absolute): a step or two for the divisors `N` used here
-/// (2³² for an edge one scene unit long) and the coordinates of real scenes, and
-/// [`div_rem`] where eight steps do not reach it or past `|q| = 2⁶²`.
+/// `x − q·d` is within a few `d`: no overflow). The estimate is off by about
+/// `|q|·2⁻⁵¹ + 2¹¹/d` units (the low half's rounding is absolute): a step or two for the
+/// divisors `N` used here (2³² for an edge one scene unit long) and the coordinates of real
+/// scenes, and [`div_rem`] where eight steps do not reach it or past `|q| = 2⁶²`.
 #[inline(always)]
 fn div_rem_estimated(x: i128, d: i64) -> (i128, i128) {
     // `x` as `f64` from its two 64-bit halves: an estimate, not the rounded value.
