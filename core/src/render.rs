@@ -1829,13 +1829,7 @@ mod tests {
     #[cfg(feature = "alloc")]
     #[test]
     fn exact_table_equals_the_pieces() {
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
+        let mut next = crate::geom::xorshift(0x9e37_79b9_7f4a_7c15);
         let eye = crate::QueryPoint::from_raw(0, 0).unwrap();
         let branches: [&[u32]; 4] = [&[], &[1], &[2, 1], &[3]];
         let mut reused = CoverageTable::new();
@@ -1871,7 +1865,7 @@ mod tests {
                     continue;
                 };
                 let a = Angle::constant(d);
-                let exact = (next() % 3 != 0).then_some(a);
+                let exact = (!next().is_multiple_of(3)).then_some(a);
                 let branch = branches[(next() % 4) as usize];
                 ivs.push(Iv {
                     exact_start: exact,

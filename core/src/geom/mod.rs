@@ -88,3 +88,14 @@ impl Sign {
         }
     }
 }
+
+/// Marsaglia's xorshift64 from `seed`: the unit tests' reproducible random numbers.
+#[cfg(test)]
+pub(crate) fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    }
+}

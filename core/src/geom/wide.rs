@@ -450,16 +450,7 @@ fn cmp_mag(a: &Wide, b: &Wide) -> Ordering {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Marsaglia's xorshift64 from `seed`.
-    fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        }
-    }
+    use crate::geom::xorshift;
 
     fn w(v: i128) -> Wide {
         Wide::from_i128(v)

@@ -806,13 +806,8 @@ mod tests {
 
     #[test]
     fn contact_matches_brute_force() {
-        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = |m: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % m) as i32
-        };
+        let mut xorshift = crate::geom::xorshift(0x9E37_79B9_7F4A_7C15);
+        let mut next = |m: u64| (xorshift() % m) as i32;
         let mut counts = [0usize; 3];
         for _ in 0..20_000 {
             let mut poly = || loop {

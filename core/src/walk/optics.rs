@@ -237,13 +237,7 @@ mod tests {
     /// at the extremes.
     #[test]
     fn estimated_division_is_euclidean() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut next = crate::geom::xorshift(0x2545_f491_4f6c_dd1d);
         let check = |x: i128, d: i64| {
             assert_eq!(
                 div_rem_estimated(x, d),

@@ -3497,13 +3497,9 @@ mod tests {
 
     /// A xorshift generator of integers uniform in `-m..=m`.
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-    fn uniform(mut seed: u64) -> impl FnMut(i64) -> i64 {
-        move |m| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % (2 * m as u64 + 1)) as i64 - m
-        }
+    fn uniform(seed: u64) -> impl FnMut(i64) -> i64 {
+        let mut next = crate::geom::xorshift(seed);
+        move |m| (next() % (2 * m as u64 + 1)) as i64 - m
     }
 
     /// `edge_end` places the hit on the edge as the `f64` quotient does, also where the
