@@ -1440,10 +1440,12 @@ pub fn restricted(full: &[TreeInterval], from: Direction, to: Direction) -> Opti
         .collect::<Option<_>>()?;
     let full_circle = fa.cmp_exact(&ta) == Equal;
     let lap_t = if full_circle { 1 } else { lap(&ta) };
-    let rel_t = if full_circle {
-        tau
-    } else {
-        (tr - fr).rem_euclid(tau)
+    // The exact lap says on which side of `from` the end lies; the `f64` difference only
+    // how far (a range a few 10⁻¹⁷ rad short of the full circle has `tr == fr`).
+    let rel_t = match (full_circle, lap_t) {
+        (true, _) => tau,
+        (false, 1) => (tr - fr + tau).clamp(0.0, tau),
+        (false, _) => (tr - fr).clamp(0.0, tau),
     };
     let at_from = |p: &Pos| matches!(p, Pos::Exact(0, a) if a.cmp_exact(&fa) == Equal);
     let inside = |p: &Pos| match p {

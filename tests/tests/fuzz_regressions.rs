@@ -44,6 +44,7 @@ const RUST_INPUTS: &[(&str, &str)] = &[
     ("ray_tree", "no_start_refracted_end_off_edge.rs"),
     ("ray_tree", "far_eye_range_across_zero.rs"),
     ("ray_tree", "no_start_range_near_glass_vertex.rs"),
+    ("ray_tree", "far_eye_extra_piece_at_range_end.rs"),
 ];
 
 fn dir(target: &str) -> PathBuf {
@@ -437,5 +438,12 @@ fn ray_tree_far_eye_range_across_zero() {
 fn ray_tree_no_start_range_near_glass_vertex() {
     let input: RayTreeInput =
         include!("../../fuzz/regressions/ray_tree/no_start_range_near_glass_vertex.rs");
+    assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
+}
+
+#[test]
+fn ray_tree_far_eye_extra_piece_at_range_end() {
+    let input: RayTreeInput =
+        include!("../../fuzz/regressions/ray_tree/far_eye_extra_piece_at_range_end.rs");
     assert_eq!(check_ray_tree(&input), Ok(1), "{input:?}");
 }
