@@ -412,7 +412,7 @@ fn firmware_walk_matches_owned_view_and_reference() {
 #[test]
 fn firmware_trees_match_owned_frame_tree() {
     use vcx::render::{angle_order, coverage, Camera, FrameInterval, Piece};
-    use vcx::walk::{frame_tree, frame_tree_into, TreeScratch};
+    use vcx::walk::{frame_tree, TreeScratch};
     let _g = lock();
     let mut arenas = Box::new(app::Arenas::new());
     let mut ram = Box::new(app::Ram::new());
@@ -522,27 +522,47 @@ fn firmware_trees_match_owned_frame_tree() {
         "{any_heading} intervals"
     );
 
-    // One frame fewer than the firmware's scratch is too few for some viewpoint, and says so.
-    let mut small = Box::new(TreeScratch::<{ app::TREE_FRAMES - 1 }>::new());
-    let too_deep = viewpoints::VIEWPOINTS
+    // One frame fewer than the firmware's scratch is too few for some viewpoint, and says
+    // so; so is one hop fewer.
+    let mut fewer_frames = Box::new(TreeScratch::<{ app::TREE_FRAMES - 1 }>::new());
+    assert!(
+        some_tree_too_deep(&complex, &s, &mut fewer_frames),
+        "TREE_FRAMES is more than the trees need"
+    );
+    let mut fewer_hops =
+        Box::new(TreeScratch::<{ app::TREE_FRAMES }, { app::TREE_HOPS - 1 }>::new());
+    assert!(
+        some_tree_too_deep(&complex, &s, &mut fewer_hops),
+        "TREE_HOPS is more than the trees need"
+    );
+}
+
+/// Whether the firmware's frame from some viewpoint is `TreeTooDeep` with `scratch`.
+fn some_tree_too_deep<S: vcx::partition::Storage, const N: usize, const H: usize>(
+    complex: &vcx::partition::Complex<S>,
+    s: &vcx::SceneRef<'_>,
+    scratch: &mut vcx::walk::TreeScratch<N, H>,
+) -> bool {
+    use vcx::render::Camera;
+    viewpoints::VIEWPOINTS
         .iter()
         .enumerate()
         .any(|(k, &(x, y))| {
             let q = QueryPoint::from_raw(x, y).expect("in range");
             let camera = Camera::new(q, app::heading(k), app::FOV, app::COLUMNS).expect("camera");
             let (from, to) = camera.range();
-            frame_tree_into(
-                &complex,
-                &s,
+            let r = vcx::walk::frame_tree_into(
+                complex,
+                s,
                 q,
                 app::TREE_DEPTH,
                 from,
                 to,
-                &mut small,
+                scratch,
                 |_| {},
-            ) == Err(WalkError::TreeTooDeep)
-        });
-    assert!(too_deep, "TREE_FRAMES is more than the trees need");
+            );
+            r == Err(WalkError::TreeTooDeep)
+        })
 }
 
 /// A damaged embedded file is an `app::Error::Format` on the firmware path, not a panic.
@@ -692,8 +712,9 @@ fn lock_step_ray_trees_allocate_nothing() {
     assert!(checked >= 20, "{checked}");
 }
 
-/// A scratch too small for the tree is an error, never a panic or a cut tree; and the
-/// scratch's size is within the documented `1.25 KiB · N + 20 KiB`.
+/// A scratch too small for the tree, in frames or in hops, is an error, never a panic or a
+/// cut tree; a tree through mirrors only needs a hop per level; and the scratch's size is
+/// within the documented `640·N + 640·H + 1 KiB` (`560·N + 600·H + 520` on x86-64).
 #[test]
 fn tree_scratch_is_bounded() {
     let _g = lock();
@@ -701,6 +722,10 @@ fn tree_scratch_is_bounded() {
     use vcx::walk::{frame_tree_into, TreeScratch};
     let scene = generate(SceneKind::Hall, 8, 2).expect("generator").scene;
     let s = scene.as_ref();
+    assert!(s
+        .objects()
+        .iter()
+        .all(|o| matches!(o.material, vcx::Material::Mirror | vcx::Material::Opaque)));
     let complex = build_by_sweep(&s).expect("build");
     let q = viewpoints(&s, 1)[0];
     let d = Direction { x: 1, y: 0 };
@@ -710,17 +735,25 @@ fn tree_scratch_is_bounded() {
     let mut enough = Box::new(TreeScratch::<16>::new());
     let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut enough, |_| {});
     assert_eq!(r, Ok(()));
-    for (n, size) in [
-        (1, size_of::<TreeScratch<1>>()),
-        (9, size_of::<TreeScratch<9>>()),
-        (16, size_of::<TreeScratch<16>>()),
-        (19, size_of::<TreeScratch<19>>()),
-        (32, size_of::<TreeScratch<32>>()),
+    let mut mirror_hops = Box::new(TreeScratch::<16, 5>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut mirror_hops, |_| {});
+    assert_eq!(r, Ok(()));
+    let mut fewer_hops = Box::new(TreeScratch::<16, 4>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut fewer_hops, |_| {});
+    assert_eq!(r, Err(WalkError::TreeTooDeep));
+    for (n, h, size) in [
+        (1, 1, size_of::<TreeScratch<1>>()),
+        (9, 4, size_of::<TreeScratch<9, 4>>()),
+        (9, 9, size_of::<TreeScratch<9>>()),
+        (11, 5, size_of::<TreeScratch<11, 5>>()),
+        (16, 16, size_of::<TreeScratch<16>>()),
+        (19, 10, size_of::<TreeScratch<19, 10>>()),
+        (32, 32, size_of::<TreeScratch<32>>()),
     ] {
-        println!("TreeScratch<{n}>: {size} bytes");
+        println!("TreeScratch<{n}, {h}>: {size} bytes");
         assert!(
-            size <= 1280 * n + 3 * 1024,
-            "TreeScratch<{n}> is {size} bytes"
+            size <= 640 * n + 640 * h + 1024,
+            "TreeScratch<{n}, {h}> is {size} bytes"
         );
     }
 }

@@ -257,19 +257,25 @@ struct Tree<'a, 's, S: Storage> {
 }
 
 /// A ray tree's working memory without a heap: the stack of frames (generations of traces
-/// in lock step), at most `N`. A tree needs one frame for the primary walk, then per level
-/// of depth two (a mirror: its split and the reflected walk) or three (a refractive
-/// object: entry split, exit split and the walk), plus one per screen along the way;
-/// `N = 3·depth + 4` covers trees of `depth` with a few screens. Deeper trees fail with
-/// [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than [`MAX_TREE_DEPTH`].
-/// Reused across trees. Size: `2 304 + 1 104·N` bytes on x86-64 — `N` frames (560 bytes)
-/// with the 1024-bit exact directions of their mapped range ends (544 bytes, see
-/// [`Frames::Exacts`]), and the hops, the branch, the start hints of anchored walks and
-/// the edge hints of splits (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints
-/// it and checks `size_of::<TreeScratch<N>>() ≤ 1.25 KiB · N + 3 KiB`).
-pub struct TreeScratch<const N: usize> {
-    stacks: Stacks<heapless::Vec<Frame, N>>,
+/// in lock step), at most `N`, and the changes of eye (hops) held at once, at most `H`.
+/// A tree needs one frame for the primary walk, then per level of depth two (a mirror: its
+/// split and the reflected walk) or three (a refractive object: entry split, exit split
+/// and the walk), plus one per screen along the way; `N = 3·depth + 4` covers trees of
+/// `depth` with a few screens. It holds one hop per level for a mirror and two for a
+/// refractive object (screens change no eye), and never more hops than frames, so the
+/// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
+/// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
+/// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
+/// x86-64: `560·N + 600·H + 520` bytes — `N` frames of 560 bytes, per hop 56 bytes and the
+/// 1024-bit exact directions of its mapped range ends (544 bytes, see [`Frames::Exacts`]),
+/// and the branch, the start hints of anchored walks and the edge hints of splits
+/// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
+pub struct TreeScratch<const N: usize, const H: usize = N> {
+    stacks: Stacks<Fixed<N, H>>,
 }
+
+/// The frames of a [`TreeScratch`], with room for `H` hops.
+struct Fixed<const N: usize, const H: usize>(heapless::Vec<Frame, N>);
 
 /// Deepest ray tree a walk follows (the branch holds `MAX_TREE_DEPTH + 1` objects, as
 /// [`crate::render::Branch`]).
@@ -278,14 +284,15 @@ pub const MAX_TREE_DEPTH: usize = 16;
 /// Objects along a ray, primary first.
 type Branch = heapless::Vec<ObjectId, { MAX_TREE_DEPTH + 1 }>;
 
-/// Changes of eye a tree holds at once: two per level (refraction).
+/// Changes of eye a growing stack of frames holds at once: two per level (refraction).
+#[cfg(feature = "alloc")]
 const MAX_HOPS: usize = 2 * MAX_TREE_DEPTH;
 
 /// The stacks of a tree in progress: frames in `F` (fixed capacity, or a vector under
 /// `alloc`), the hops and the branch down to the top frame.
 struct Stacks<F: Frames> {
     frames: F,
-    hops: heapless::Vec<Hop, MAX_HOPS>,
+    hops: F::Hops,
     branch: Branch,
     /// The exact directions of the range ends mapped through the hops, one [`ExactPair`]
     /// per hop ([`Tree::map_range`]), as many as frames at most (see [`Frames::Exacts`]).
@@ -330,10 +337,10 @@ type Edges = [Option<(ObjectId, usize)>; EDGE_HINTS];
 const EDGE_HINTS: usize = 8;
 
 impl<F: Frames> Stacks<F> {
-    const fn new(frames: F, exacts: F::Exacts) -> Self {
+    const fn new(frames: F, hops: F::Hops, exacts: F::Exacts) -> Self {
         Stacks {
             frames,
-            hops: heapless::Vec::new(),
+            hops,
             branch: heapless::Vec::new(),
             exacts,
             #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
@@ -385,9 +392,11 @@ trait Frames {
     /// The stack of exact directions that goes with it. Each entry is pushed by
     /// [`Tree::change_eye`] right before the one frame that owns it (its `Level::exacts` is
     /// the length below the entry) and popped with that frame, and the primary frame owns
-    /// none: the stack never holds more entries than there are frames, so a capacity of
-    /// `N` entries for `N` frames never overflows (two exact directions each: 2·`N`).
+    /// none: the stack never holds more entries than hops (nor hops than frames), so a
+    /// capacity of `H` entries for `H` hops never overflows (two exact directions each).
     type Exacts: ExactStack;
+    /// The stack of hops that goes with it.
+    type Hops: HopStack;
     /// How many more frames fit.
     fn room(&self) -> usize;
     fn push(&mut self, f: Frame) -> Result<(), WalkError>;
@@ -486,22 +495,23 @@ fn split_top(s: &mut [ExactPair]) -> Result<Reserved<'_>, WalkError> {
     Ok((top, below.as_flattened()))
 }
 
-impl<const N: usize> Frames for heapless::Vec<Frame, N> {
-    type Exacts = ExactSlots<heapless::Vec<ExactPair, N>>;
+impl<const N: usize, const H: usize> Frames for Fixed<N, H> {
+    type Exacts = ExactSlots<heapless::Vec<ExactPair, H>>;
+    type Hops = heapless::Vec<Hop, H>;
     fn room(&self) -> usize {
-        N - self.len()
+        N - self.0.len()
     }
     fn push(&mut self, f: Frame) -> Result<(), WalkError> {
-        heapless::Vec::push(self, f).map_err(|_| WalkError::TreeTooDeep)
+        self.0.push(f).map_err(|_| WalkError::TreeTooDeep)
     }
     fn pop(&mut self) {
-        heapless::Vec::pop(self);
+        self.0.pop();
     }
     fn top(&mut self) -> Option<&mut Frame> {
-        self.last_mut()
+        self.0.last_mut()
     }
     fn clear(&mut self) {
-        heapless::Vec::clear(self)
+        self.0.clear()
     }
 }
 
@@ -510,6 +520,7 @@ impl<const N: usize> Frames for heapless::Vec<Frame, N> {
 #[cfg(feature = "alloc")]
 impl Frames for Vec<Frame> {
     type Exacts = ExactSlots<Vec<ExactPair>>;
+    type Hops = heapless::Vec<Hop, MAX_HOPS>;
     fn room(&self) -> usize {
         usize::MAX
     }
@@ -528,22 +539,51 @@ impl Frames for Vec<Frame> {
     }
 }
 
-impl<const N: usize> TreeScratch<N> {
+/// A stack of [`Hop`]s, of fixed capacity.
+// Only mirrors and refraction push.
+#[cfg_attr(
+    not(any(feature = "mirrors", feature = "refraction")),
+    allow(dead_code)
+)]
+trait HopStack: core::ops::Deref<Target = [Hop]> {
+    /// [`WalkError::TreeTooDeep`] when full.
+    fn push(&mut self, hop: Hop) -> Result<(), WalkError>;
+    fn truncate(&mut self, len: usize);
+    fn clear(&mut self);
+}
+
+impl<const H: usize> HopStack for heapless::Vec<Hop, H> {
+    fn push(&mut self, hop: Hop) -> Result<(), WalkError> {
+        heapless::Vec::push(self, hop).map_err(|_| WalkError::TreeTooDeep)
+    }
+    fn truncate(&mut self, len: usize) {
+        heapless::Vec::truncate(self, len)
+    }
+    fn clear(&mut self) {
+        heapless::Vec::clear(self)
+    }
+}
+
+impl<const N: usize, const H: usize> TreeScratch<N, H> {
     /// Empty scratch.
     pub const fn new() -> Self {
         TreeScratch {
-            stacks: Stacks::new(heapless::Vec::new(), ExactSlots::new(heapless::Vec::new())),
+            stacks: Stacks::new(
+                Fixed(heapless::Vec::new()),
+                heapless::Vec::new(),
+                ExactSlots::new(heapless::Vec::new()),
+            ),
         }
     }
 }
 
-impl<const N: usize> core::fmt::Debug for TreeScratch<N> {
+impl<const N: usize, const H: usize> core::fmt::Debug for TreeScratch<N, H> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "TreeScratch<{N}>")
+        write!(f, "TreeScratch<{N}, {H}>")
     }
 }
 
-impl<const N: usize> Default for TreeScratch<N> {
+impl<const N: usize, const H: usize> Default for TreeScratch<N, H> {
     fn default() -> Self {
         Self::new()
     }
@@ -970,7 +1010,11 @@ fn collect<S: Storage>(
     vertices: bool,
     context: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    let mut stacks = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
+    let mut stacks = Stacks::new(
+        Vec::new(),
+        heapless::Vec::new(),
+        ExactSlots::new(Vec::new()),
+    );
     let mut out = Vec::new();
     let mut sink = |i: Interval<'_>| {
         out.push(TreeInterval {
@@ -1000,16 +1044,16 @@ fn collect<S: Storage>(
 /// `scratch` ([`TreeScratch`]). `from == to` is the full circle from `from`.
 ///
 /// Errors as [`ray_tree`], and [`WalkError::TreeTooDeep`] when the tree needs more frames
-/// than `scratch` holds.
+/// or hops than `scratch` holds.
 #[allow(clippy::too_many_arguments)]
-pub fn frame_tree_into<S: Storage, const N: usize>(
+pub fn frame_tree_into<S: Storage, const N: usize, const H: usize>(
     complex: &Complex<S>,
     scene: &SceneRef<'_>,
     q: QueryPoint,
     depth: usize,
     from: Direction,
     to: Direction,
-    scratch: &mut TreeScratch<N>,
+    scratch: &mut TreeScratch<N, H>,
     mut emit: impl FnMut(TreeSpan<'_>),
 ) -> Result<(), WalkError> {
     let start = complex.trace_start(scene, q)?;
@@ -2890,7 +2934,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
         };
         self.map_range(&mut sc.exacts, p, level.ccw, &hop, flip)?;
-        sc.hops.push(hop).map_err(|_| WalkError::TreeTooDeep)?;
+        sc.hops.push(hop)?;
         match kind {
             #[cfg(feature = "refraction")]
             SplitKind::Entry(eta) => sc.push(
@@ -4076,7 +4120,11 @@ mod tests {
                     };
                     for m in (0..s.len() as u32).map(ObjectId) {
                         let run = |fresh: bool| {
-                            let mut sc = Stacks::new(Vec::new(), ExactSlots::new(Vec::new()));
+                            let mut sc = Stacks::new(
+                                Vec::new(),
+                                heapless::Vec::new(),
+                                ExactSlots::new(Vec::new()),
+                            );
                             tree.push_range_walk(&mut sc, level, m, (&from, &to), &first, false)
                                 .ok()?;
                             let mut out = Piece::empty();
