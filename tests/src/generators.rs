@@ -1534,6 +1534,20 @@ pub fn check_tree_ranges(
     compare_tree_ranges(s, c, q, depth, full, ranges)
 }
 
+/// `walk::frame_tree_into` with 64 frames and `H` hops: each interval's start bits and branch.
+fn stream<const H: usize>(
+    c: &Complex,
+    s: &SceneRef<'_>,
+    (q, depth, from, to): (QueryPoint, usize, Direction, Direction),
+) -> Result<Vec<(u64, Vec<ObjectId>)>, vcx::walk::WalkError> {
+    let mut streamed = Vec::new();
+    let mut scratch = Box::new(vcx::walk::TreeScratch::<64, H>::new());
+    vcx::walk::frame_tree_into(c, s, q, depth, from, to, &mut scratch, |i| {
+        streamed.push((i.start.to_bits(), i.branch.to_vec()))
+    })?;
+    Ok(streamed)
+}
+
 /// `walk::ray_tree_range` from `q` against [`restricted`] of the full tree `full` over the
 /// given ranges; the ranges [`restricted`] cannot decide are skipped. Returns how many were
 /// compared.
@@ -1556,12 +1570,27 @@ pub fn compare_tree_ranges(
         // What a frame draws: the same intervals, without vertices.
         let frame =
             vcx::walk::frame_tree(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
-        // The same streamed without a heap (fixed-capacity frames).
-        let mut streamed = Vec::new();
-        let mut scratch = Box::new(vcx::walk::TreeScratch::<64>::new());
-        vcx::walk::frame_tree_into(c, s, q, depth, from, to, &mut scratch, |i| {
-            streamed.push((i.start.to_bits(), i.branch.to_vec()))
-        })
+        // The same streamed without a heap (fixed-capacity frames), with the hops
+        // `TreeScratch` documents as enough: one per level through mirrors, two with
+        // refraction.
+        let refraction = s
+            .objects()
+            .iter()
+            .any(|o| matches!(o.material, vcx::Material::Refractive { .. }));
+        let hops = if refraction { 2 * depth } else { depth };
+        let range = (q, depth, from, to);
+        let streamed = match hops {
+            0 => stream::<0>(c, s, range),
+            1 => stream::<1>(c, s, range),
+            2 => stream::<2>(c, s, range),
+            3 => stream::<3>(c, s, range),
+            4 => stream::<4>(c, s, range),
+            5 => stream::<5>(c, s, range),
+            6 => stream::<6>(c, s, range),
+            8 => stream::<8>(c, s, range),
+            10 => stream::<10>(c, s, range),
+            _ => stream::<64>(c, s, range),
+        }
         .map_err(|e| at(e.to_string()))?;
         let collected: Vec<_> = frame
             .iter()
