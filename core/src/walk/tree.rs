@@ -295,7 +295,7 @@ struct Stacks<F: Frames> {
     hops: F::Hops,
     branch: Branch,
     /// The exact directions of the range ends mapped through the hops, one [`ExactPair`]
-    /// per hop ([`Tree::map_range`]), as many as frames at most (see [`Frames::Exacts`]).
+    /// per hop ([`Tree::map_range`]), as many as hops at most (see [`Frames::Exacts`]).
     exacts: F::Exacts,
     /// The start cylinders last found by anchored walks ([`Tree::locate_floor`]).
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
