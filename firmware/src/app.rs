@@ -251,9 +251,9 @@ pub const TREE_DEPTH: usize = 4;
 /// `WalkError::TreeTooDeep`, and the host test checks that one frame fewer is too few.
 pub const TREE_FRAMES: usize = 2 * TREE_DEPTH + 1;
 
-/// Changes of eye the tree walk holds at once: one per level for a mirror (where
-/// `TreeScratch`'s default is one per frame, which refraction's two per level need); the
-/// host test checks that one fewer is too few.
+/// Changes of eye the tree walk holds at once: one per level for a mirror
+/// (`TreeScratch`'s default, one per frame, would also cover refraction's two per level);
+/// the host test checks that one fewer is too few.
 pub const TREE_HOPS: usize = TREE_DEPTH;
 
 /// The ray tree's working memory.

@@ -1572,7 +1572,7 @@ pub fn compare_tree_ranges(
             vcx::walk::frame_tree(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
         // The same streamed without a heap (fixed-capacity frames), with the hops
         // `TreeScratch` documents as enough: one per level through mirrors, two with
-        // refraction.
+        // refraction (the usual depths; deeper trees take 64).
         let refraction = s
             .objects()
             .iter()
