@@ -1559,6 +1559,13 @@ pub fn compare_tree_ranges(
     full: &[TreeInterval],
     ranges: impl IntoIterator<Item = (Direction, Direction)>,
 ) -> Result<usize, String> {
+    // The hops `TreeScratch` documents as enough: one per level through mirrors, two with
+    // refraction (the usual depths below; deeper trees take 64).
+    let refraction = s
+        .objects()
+        .iter()
+        .any(|o| matches!(o.material, vcx::Material::Refractive { .. }));
+    let hops = if refraction { 2 * depth } else { depth };
     let mut compared = 0;
     for (from, to) in ranges {
         let Some(want) = restricted(full, from, to) else {
@@ -1570,14 +1577,7 @@ pub fn compare_tree_ranges(
         // What a frame draws: the same intervals, without vertices.
         let frame =
             vcx::walk::frame_tree(c, s, q, depth, from, to).map_err(|e| at(e.to_string()))?;
-        // The same streamed without a heap (fixed-capacity frames), with the hops
-        // `TreeScratch` documents as enough: one per level through mirrors, two with
-        // refraction (the usual depths; deeper trees take 64).
-        let refraction = s
-            .objects()
-            .iter()
-            .any(|o| matches!(o.material, vcx::Material::Refractive { .. }));
-        let hops = if refraction { 2 * depth } else { depth };
+        // The same streamed without a heap (fixed-capacity frames), with `hops`.
         let range = (q, depth, from, to);
         let streamed = match hops {
             0 => stream::<0>(c, s, range),
