@@ -578,7 +578,9 @@ pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     end: Option<(u8, KeyedAngle)>,
     /// The tangent vertex of the last event, if it crossed a chain: never an exit of the
     /// cylinder entered, so its angle is not computed (see [`Walker::chain_exit_ccw`]).
-    last: Option<usize>,
+    /// A `u32` (a scene has at most `MAX_VERTICES`; `None` otherwise, which only costs
+    /// that angle): a ray tree keeps a walker per frame.
+    last: Option<u32>,
     /// The tangents from `q` to recent chain objects: consecutive cylinders of a trace
     /// mostly share a chain, a walk comes back to the objects near the eye all around the
     /// circle, and the tangents depend only on the object.
@@ -616,7 +618,8 @@ fn ccw_before(a: (u8, &KeyedAngle), b: (u8, &KeyedAngle)) -> bool {
 impl<const K: usize> Walker<K> {
     /// A walk of the trace of `q` from cylinder `cur` at angle `from` (lap 0), until `end`
     /// (see the type's documentation for laps and `None`), with a tangent cache of `K`
-    /// entries.
+    /// entries. Inlined: a call builds the walker apart and moves it (a `memcpy`).
+    #[inline]
     pub(crate) fn new(
         q: QueryPoint,
         anchor: Anchor,
@@ -805,7 +808,7 @@ impl<const K: usize> Walker<K> {
             Some(e) => self.cross(complex, scene, c, e, &angle)?,
         };
         self.theta = angle;
-        self.last = exit.map(|e| e.vertex);
+        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
@@ -868,7 +871,7 @@ impl<const K: usize> Walker<K> {
         }
         let h = arc as usize;
         // The vertex just crossed is no exit (see `chain_exit_ccw`).
-        if self.last == Some(h) {
+        if self.last.is_some_and(|l| l as usize == h) {
             return Some(());
         }
         let ahead = exits_through(side, true);
@@ -912,7 +915,7 @@ impl<const K: usize> Walker<K> {
         };
         // The vertex just crossed: the line from the eye through it is the one at θ, or (an
         // arc vertex, tangent over less than half a turn) its reverse at θ + π.
-        if self.last == Some(h) {
+        if self.last.is_some_and(|l| l as usize == h) {
             return;
         }
         let a = tangent_angle(scene, self.q, h, ahead).keyed();
@@ -954,7 +957,7 @@ impl<const K: usize> Walker<K> {
             return;
         };
         // The vertex just crossed, as counter-clockwise (θ − π for an arc vertex's reverse).
-        if self.last == Some(h) {
+        if self.last.is_some_and(|l| l as usize == h) {
             return;
         }
         let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
@@ -1015,7 +1018,7 @@ impl<const K: usize> Walker<K> {
         self.full = angle.is_none();
         let at = angle.map_or(Angle::ZERO, |a| a.angle);
         self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
-        self.last = exit.map(|e| e.vertex);
+        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(at, exit, next)))

@@ -84,47 +84,63 @@ pub struct TreeSpan<'b> {
     pub branch: &'b [ObjectId],
 }
 
-/// A range end: a direction from an eye, with the vertex it points at (and whether that
-/// vertex is ahead of the eye) when it is the direction of an eye–vertex pair.
+/// A range end: a direction from an eye, with the vertex it points at when it is the
+/// direction of an eye–vertex pair. 32 bytes: a ray tree holds three per frame.
 #[derive(Clone, Debug)]
 struct Dir {
     angle: Angle,
-    vertex: Option<(usize, bool)>,
+    /// The vertex (global index) if `pointed`; indices fit (at most
+    /// [`crate::scene::MAX_VERTICES`]).
+    index: u32,
+    pointed: bool,
     /// For an end placed in `f64` through a hop ([`Tree::map_end`]; `angle` is then
     /// rounded): the exact direction, so that events and vertices exactly on it are
     /// classified exactly (a vertex exactly on a mapped range end is a frequent
     /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`), as its index in the
     /// stack of exact directions ([`Stacks::exacts`] flattened: 272 bytes each, so range
-    /// ends, which are moved around a lot, do not carry them). `None` past `Wide`'s budget.
+    /// ends, which are moved around a lot, do not carry them; two per hop, at most
+    /// `4·MAX_TREE_DEPTH + 4`). `None` past `Wide`'s budget.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
         allow(dead_code)
     )]
-    exact: Option<u16>,
+    exact: Option<u8>,
 }
 
 impl Dir {
-    fn vertex(angle: Angle, vertex: usize, ahead: bool) -> Dir {
-        Dir {
-            angle,
-            vertex: Some((vertex, ahead)),
-            exact: None,
+    fn vertex(angle: Angle, vertex: usize) -> Dir {
+        match u32::try_from(vertex) {
+            Ok(index) => Dir {
+                angle,
+                index,
+                pointed: true,
+                exact: None,
+            },
+            // Never: a scene has at most `MAX_VERTICES`.
+            Err(_) => Dir::at(angle),
         }
     }
 
     fn at(angle: Angle) -> Dir {
         Dir {
             angle,
-            vertex: None,
+            index: 0,
+            pointed: false,
             exact: None,
         }
     }
 
     fn of(s: &Step) -> Dir {
         match s.vertex {
-            Some(v) => Dir::vertex(s.angle, v, s.ahead),
+            Some(v) => Dir::vertex(s.angle, v),
             None => Dir::at(s.angle),
         }
+    }
+
+    /// The vertex this end points at.
+    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    fn pointed(&self) -> Option<usize> {
+        self.pointed.then_some(self.index as usize)
     }
 }
 
@@ -184,15 +200,16 @@ impl Dir {
 #[derive(Clone, Copy, Debug)]
 struct Rule {
     /// The number of hops up to the stage where the boundary arises: a prefix of the
-    /// stack of hops that stays in place until the boundary is resolved.
-    stage: usize,
+    /// stack of hops that stays in place until the boundary is resolved (bytes, as
+    /// [`Level`]: a tree keeps a boundary per frame).
+    stage: u8,
     /// The eye of that stage and the exact direction of the boundary from it.
     eye: QueryPoint,
     dir: (i128, i128),
     /// Branch index of the object hit by that stage.
-    level: usize,
+    level: u8,
     /// The vertex that caused the boundary, if no vertex is found by the rule.
-    fallback: Option<usize>,
+    fallback: Option<u32>,
 }
 
 /// A boundary between pieces: its primary angle is computed from the rule
@@ -266,7 +283,7 @@ struct Tree<'a, 's, S: Storage> {
 /// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
 /// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
 /// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `560·N + 600·H + 520` bytes — `N` frames of 560 bytes, per hop 56 bytes and the
+/// x86-64: `448·N + 600·H + 520` bytes — `N` frames of 448 bytes, per hop 56 bytes and the
 /// 1024-bit exact directions of its mapped range ends (544 bytes, see [`Frames::Exacts`]),
 /// and the branch, the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
@@ -351,26 +368,35 @@ impl<F: Frames> Stacks<F> {
         }
     }
 
+    /// The lengths of the hop and branch stacks: where a boundary arises (its stage and
+    /// level, [`Rule`]).
+    fn lengths(&self) -> Result<(u8, u8), WalkError> {
+        let len = |n: usize| u8::try_from(n).map_err(|_| WalkError::TreeTooDeep);
+        Ok((len(self.hops.len())?, len(self.branch.len())?))
+    }
+
     /// [`WalkError::TreeTooDeep`] unless `n` more frames fit beside the held places.
     fn room(&self, n: usize) -> Result<(), WalkError> {
-        if self.frames.room() < self.held + n {
+        if self.frames.room() < self.held.saturating_add(n) {
             return Err(WalkError::TreeTooDeep);
         }
         Ok(())
     }
 
-    /// Pushes `f` of `level`, which takes its held places too.
+    /// Pushes `f` of `level`, which takes its held places too. Inlined, so that the frame
+    /// is built in its slot: a call moves it there (a `memcpy` per push).
+    #[inline(always)]
     fn push(&mut self, level: Level, f: Frame) -> Result<(), WalkError> {
-        self.room(1 + level.held)?;
+        self.room(1 + usize::from(level.held))?;
         self.frames.push(f)?;
-        self.held += level.held;
+        self.held += usize::from(level.held);
         Ok(())
     }
 
     /// Pops the top frame of `level`, leaving what it pushed with it.
     fn leave(&mut self, level: Level) {
         self.frames.pop();
-        self.held = self.held.saturating_sub(level.held);
+        self.held = self.held.saturating_sub(usize::from(level.held));
     }
 
     /// Pops the exhausted top frame of `level` and what it pushed with it.
@@ -381,9 +407,9 @@ impl<F: Frames> Stacks<F> {
 
     /// Drops what the frame of `level` pushed with it.
     fn restore(&mut self, level: Level) {
-        self.hops.truncate(level.hops);
-        self.branch.truncate(level.branch);
-        self.exacts.truncate_to(level.exacts);
+        self.hops.truncate(level.hops.into());
+        self.branch.truncate(level.branch.into());
+        self.exacts.truncate_to(level.exacts.into());
     }
 }
 
@@ -613,15 +639,41 @@ enum Frame {
 #[derive(Clone, Copy)]
 struct Level {
     eye: QueryPoint,
-    depth: usize,
+    /// At most `MAX_TREE_DEPTH + 1` ([`Tree::primary_walk`]); the stack lengths below are
+    /// at most `2·MAX_TREE_DEPTH` hops and entries and `MAX_TREE_DEPTH + 1` objects
+    /// ([`Level::marks`]): bytes, as a tree keeps a level per frame.
+    depth: u8,
     ccw: bool,
-    hops: usize,
-    branch: usize,
-    exacts: usize,
+    hops: u8,
+    branch: u8,
+    exacts: u8,
     /// The places of the frames that left the stack with their last piece, which this one
     /// continues: it stands for them in the stack's capacity until it is popped (they
     /// would have been popped right after it) and restores the stacks as they would have.
-    held: usize,
+    held: u16,
+}
+
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+impl Level {
+    /// `self` restoring the stacks as `sc` holds them now.
+    fn marks<F: Frames>(self, sc: &Stacks<F>) -> Result<Level, WalkError> {
+        let (hops, branch) = sc.lengths()?;
+        Ok(Level {
+            hops,
+            branch,
+            exacts: u8::try_from(sc.exacts.entries().len()).map_err(|_| WalkError::TreeTooDeep)?,
+            held: 0,
+            ..self
+        })
+    }
+
+    /// `self` also holding the place of the frame that leaves the stack.
+    fn holding(self) -> Result<Level, WalkError> {
+        Ok(Level {
+            held: self.held.checked_add(1).ok_or(WalkError::TreeTooDeep)?,
+            ..self
+        })
+    }
 }
 
 /// The primary walk restricted to the range `(f, t)` (exact positions: the lap of the walk
@@ -933,7 +985,7 @@ pub fn ray_tree<S: Storage>(
         // last interval, which ends there (the primary stage: no hops).
         Some(i) => {
             if let Some(b) = first {
-                let rule = tree.event_boundary(0, 0, q, &b).rule;
+                let rule = tree.event_boundary((0, 0), q, &b).rule;
                 i.exact_start = Some(b.angle);
                 i.start_vertex = tree.resolve(&[], &rule, &left, &i.branch);
             }
@@ -1146,6 +1198,8 @@ impl<S: Storage> Tree<'_, '_, S> {
             }),
             true,
         );
+        // Deeper than `MAX_TREE_DEPTH` overflows the branch anyway (`TreeTooDeep`).
+        let depth = u8::try_from(depth.min(MAX_TREE_DEPTH + 1)).unwrap_or(u8::MAX);
         PrimaryWalk {
             level: Level {
                 eye: q,
@@ -1258,12 +1312,12 @@ impl<S: Storage> Tree<'_, '_, S> {
         // behind a mirror is the whole range).
         let mut fresh = false;
         loop {
-            let (stage, level_len) = (sc.hops.len(), sc.branch.len());
+            let (stage, level_len) = sc.lengths()?;
             let Some(top) = sc.frames.top() else {
                 return Ok(());
             };
             // A piece is written in place and resolved by reference, an edge resolved where
-            // it is made: every move of a piece (224 bytes) is a copy.
+            // it is made: every move of a piece (176 bytes) is a copy.
             match top {
                 Frame::Primary(w) => {
                     let level = w.level;
@@ -1345,18 +1399,9 @@ impl<S: Storage> Tree<'_, '_, S> {
         // A frame pushed here restores the stacks as they are now, or in place of `level`'s.
         #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
         let here = if left {
-            Level {
-                held: level.held + 1,
-                ..level
-            }
+            level.holding()?
         } else {
-            Level {
-                hops: sc.hops.len(),
-                branch: sc.branch.len(),
-                exacts: sc.exacts.entries().len(),
-                held: 0,
-                ..level
-            }
+            level.marks(sc)?
         };
         match material {
             #[cfg(feature = "screens")]
@@ -1371,7 +1416,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
             // The ray type's code is compiled out (cargo features): an error, never a tree
             // that silently stops at the object.
-            _ if continues(material, level.depth) => Err(WalkError::RayTypeDisabled {
+            _ if continues(material, level.depth.into()) => Err(WalkError::RayTypeDisabled {
                 object: c,
                 material,
             }),
@@ -1388,7 +1433,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The boundary made by a walk event at the given stage (hops) and level (branch index).
-    fn event_boundary(&self, stage: usize, level: usize, eye: QueryPoint, d: &Dir) -> Boundary {
+    fn event_boundary(&self, (stage, level): (u8, u8), eye: QueryPoint, d: &Dir) -> Boundary {
         Boundary {
             exact: (stage == 0).then_some(d.angle),
             rule: Rule {
@@ -1396,7 +1441,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 eye,
                 dir: d.angle.vector(),
                 level,
-                fallback: d.vertex.map(|v| v.0),
+                fallback: d.pointed.then_some(d.index),
             },
         }
     }
@@ -1440,7 +1485,7 @@ impl PrimaryWalk {
                 Ordering::Equal => {
                     if after != self.seen {
                         self.cur_from = Dir::of(&c.last);
-                        self.cur_boundary = tree.event_boundary(0, 0, q, &Dir::of(&c.first));
+                        self.cur_boundary = tree.event_boundary((0, 0), q, &Dir::of(&c.first));
                     }
                     self.seen = after;
                     continue;
@@ -1470,7 +1515,7 @@ impl PrimaryWalk {
                 out.ceiling = self.seen;
                 out.boundary = core::mem::replace(
                     &mut self.cur_boundary,
-                    tree.event_boundary(0, 0, q, &out.to),
+                    tree.event_boundary((0, 0), q, &out.to),
                 );
                 self.seen = after;
                 return Ok(true);
@@ -1574,7 +1619,11 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// The primary angle (radians, `f64`) of a boundary: its direction intersected with
     /// each hop's edge line, continued from the previous eye.
     fn radians(&self, hops: &[Hop], rule: &Rule) -> f64 {
-        let d = self.map_dir(hops.get(..rule.stage).unwrap_or(hops), rule.eye, rule.dir);
+        let d = self.map_dir(
+            hops.get(..rule.stage.into()).unwrap_or(hops),
+            rule.eye,
+            rule.dir,
+        );
         let a = libm::atan2(d.1, d.0);
         let tau = 2.0 * core::f64::consts::PI;
         if a < 0.0 {
@@ -1628,7 +1677,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         left: &[ObjectId],
         right: &[ObjectId],
     ) -> Option<usize> {
-        let hops = hops.get(..rule.stage)?;
+        let hops = hops.get(..rule.stage.into())?;
         let stages = hops.len();
         // The boundary direction at every earlier stage modulo P, mapped back hop by hop
         // once: most stages hold no candidate vertex on the ray, which different residues
@@ -1648,7 +1697,11 @@ impl<S: Storage> Tree<'_, '_, S> {
                 None => (hops.first().map_or(rule.eye, |h| h.prev), 0, None),
                 Some(h) => (h.next, h.level, Some((h.a, h.b))),
             };
-            let level = if st == stages { rule.level } else { level };
+            let level = if st == stages {
+                rule.level.into()
+            } else {
+                level
+            };
             let owners = [left.get(level), right.get(level)];
             // The vertices of the objects this stage hits on either side, beyond the
             // stage's origin edge (a ray leaving a mirror or refractive edge).
@@ -1675,7 +1728,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     let w = diff(self.qpoint(v), eye);
                     (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
                 });
-                return best.or(rule.fallback);
+                return best.or(rule.fallback.map(|v| v as usize));
             }
             // Different residues of `cross(d, w)`'s two products prove it nonzero.
             if let Some(&Some((r0, r1))) = residues.get(st) {
@@ -1712,7 +1765,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return best;
             }
         }
-        rule.fallback
+        rule.fallback.map(|v| v as usize)
     }
 
     /// The boundary direction of `rule` at every stage before the last, mapped back hop by
@@ -2543,7 +2596,7 @@ impl RangeWalk {
         &mut self,
         tree: &Tree<'_, '_, S>,
         exacts: &[(Wide, Wide)],
-        (stage, level): (usize, usize),
+        (stage, level): (u8, u8),
         (out, fresh): (&mut Piece, bool),
         c: &mut Cluster,
     ) -> Result<bool, WalkError> {
@@ -2594,7 +2647,7 @@ impl RangeWalk {
                     let from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
                     out.to = Dir::of(&c.first);
                     out.ceiling = self.seen;
-                    let next = tree.event_boundary(stage, level, eye, &out.to);
+                    let next = tree.event_boundary((stage, level), eye, &out.to);
                     if fresh {
                         self.cur_boundary = next;
                     } else {
@@ -2626,7 +2679,7 @@ impl RangeWalk {
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl<S: Storage> Tree<'_, '_, S> {
     fn toward(&self, eye: QueryPoint, v: usize) -> Dir {
-        Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v, true)
+        Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v)
     }
 
     /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`, written over
@@ -2643,7 +2696,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         hop: &Hop,
         mirror: bool,
     ) -> Result<(), WalkError> {
-        if let Some((v, _)) = end.vertex {
+        if let Some(v) = end.pointed() {
             if v == hop.a || v == hop.b {
                 *end = self.toward(hop.next, v);
                 return Ok(());
@@ -2758,14 +2811,13 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
         };
         let exact = if written {
-            Some(u16::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
+            Some(u8::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
         } else {
             None
         };
         *end = Dir {
-            angle: Angle::constant(dir),
-            vertex: None,
             exact,
+            ..Dir::at(Angle::constant(dir))
         };
         Ok(())
     }
@@ -2806,7 +2858,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // Counter-clockwise from the eye behind the hop.
         let (a, b) = if flip { (&*hi, &*lo) } else { (&*lo, &*hi) };
         if thin || cross(a.angle.vector(), b.angle.vector()) <= 0 {
-            let keep = if a.vertex.is_some() && b.vertex.is_none() {
+            let keep = if a.pointed && !b.pointed {
                 a.clone()
             } else {
                 b.clone()
@@ -2831,7 +2883,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         p: &mut Piece,
     ) -> Result<bool, WalkError> {
         // The split's place, as if pushed.
-        sc.room(1 + level.held)?;
+        sc.room(1 + usize::from(level.held))?;
         // Direct-mapped: the slot holds `m`'s edge, or another object's.
         let slot = m.0 as usize % EDGE_HINTS;
         let hint = sc.edges.get(slot).copied().flatten();
@@ -2843,7 +2895,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             hint,
             done: false,
         };
-        let (stage, index) = (sc.hops.len(), sc.branch.len());
+        let (stage, index) = sc.lengths()?;
         let ends = (&p.from, &p.to);
         let Some(e) = cut.next(self, sc.exacts.flat(), (level.eye, level.ccw), ends) else {
             sc.restore(level);
@@ -2915,23 +2967,15 @@ impl<S: Storage> Tree<'_, '_, S> {
             next: eye2,
             level: hop_level,
         };
+        let turned = Level {
+            eye: eye2,
+            ccw: level.ccw != flip,
+            ..level
+        };
         let here = if left {
-            Level {
-                eye: eye2,
-                ccw: level.ccw != flip,
-                held: level.held + 1,
-                ..level
-            }
+            turned.holding()?
         } else {
-            Level {
-                eye: eye2,
-                ccw: level.ccw != flip,
-                hops: sc.hops.len(),
-                branch: sc.branch.len(),
-                exacts: sc.exacts.entries().len(),
-                held: 0,
-                ..level
-            }
+            turned.marks(sc)?
         };
         self.map_range(&mut sc.exacts, p, level.ccw, &hop, flip)?;
         sc.hops.push(hop)?;
@@ -3106,7 +3150,7 @@ impl Split {
         &mut self,
         tree: &Tree<'_, '_, S>,
         exacts: &[(Wide, Wide)],
-        (stage, level): (usize, usize),
+        (stage, level): (u8, u8),
         (out, fresh): (&mut Piece, bool),
     ) -> Option<(usize, usize)> {
         let (eye, ccw) = (self.level.eye, self.level.ccw);
@@ -3255,7 +3299,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// are large, and every move is a copy.
     fn write_edge_piece(
         &self,
-        (eye, stage, level): (QueryPoint, usize, usize),
+        (eye, stage, level): (QueryPoint, u8, u8),
         e: &EdgePiece,
         out: &mut Piece,
         range: Option<(&Dir, &Dir, &Boundary)>,
@@ -3264,7 +3308,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             // The hit (or exit) edge changes at vertex `v`.
             (Some(v), _) => {
                 out.from = self.toward(eye, v);
-                out.boundary = self.event_boundary(stage, level, eye, &out.from);
+                out.boundary = self.event_boundary((stage, level), eye, &out.from);
             }
             (None, Some((from, _, first))) => {
                 out.from = from.clone();
@@ -4070,7 +4114,7 @@ mod tests {
         let (mut walks, mut pieces, mut moved) = (0, 0, 0);
         let n = s.vertices().len();
         for (q, hs) in wall_eyes(&c, &s, 1, 7) {
-            let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
+            let toward = |h: usize| Dir::vertex(Angle::from_query(q, ranked(&s, h)), h);
             for (h, ccw) in hs.into_iter().flat_map(|h| [(h, true), (h, false)]) {
                 let from = toward(h);
                 // The same start as an exact end whose angle is rounded before it in walk
@@ -4086,9 +4130,8 @@ mod tests {
                 let (x, y) = ((x << 20) + t * y, (y << 20) - t * x);
                 let d = Direction::new(x as i64, y as i64).unwrap();
                 let exact = Dir {
-                    angle: Angle::constant(d),
-                    vertex: None,
                     exact: Some(0),
+                    ..Dir::at(Angle::constant(d))
                 };
                 // Ends a few vertices' directions on, less than a half turn.
                 let sign = |t: &Dir| cross(from.angle.vector(), t.angle.vector()).signum();
@@ -4106,7 +4149,7 @@ mod tests {
                             eye: q,
                             dir: from.angle.vector(),
                             level: 0,
-                            fallback: Some(h),
+                            fallback: Some(h as u32),
                         },
                     };
                     let level = Level {
@@ -4210,7 +4253,7 @@ mod tests {
                 let dirs: Vec<Dir> = ids
                     .clone()
                     .flat_map(|h| {
-                        let at = Dir::vertex(Angle::from_query(q, ranked(&s, h)), h, true);
+                        let at = Dir::vertex(Angle::from_query(q, ranked(&s, h)), h);
                         let (mut x, mut y) = at.angle.vector();
                         while x.abs().max(y.abs()) >= 1 << 30 {
                             (x, y) = (x >> 1, y >> 1);
