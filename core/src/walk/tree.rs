@@ -197,27 +197,36 @@ impl Dir {
 /// 1024-bit integers ([`Tree::map_hop_exact`], up to 9 hops); beyond that in `f64` with a
 /// relative tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
 /// `boundary_vertex_mirror_corner.rs`).
+///
+/// A boundary between pieces, with what this rule needs: its primary angle is computed
+/// from it ([`Tree::radians`]) only if it starts an interval. 56 bytes: a tree keeps one
+/// per frame.
 #[derive(Clone, Copy, Debug)]
-struct Rule {
+struct Boundary {
     /// The number of hops up to the stage where the boundary arises: a prefix of the
-    /// stack of hops that stays in place until the boundary is resolved (bytes, as
-    /// [`Level`]: a tree keeps a boundary per frame).
+    /// stack of hops that stays in place until the boundary is resolved (a byte, as in
+    /// [`Level`]).
     stage: u8,
-    /// The eye of that stage and the exact direction of the boundary from it.
+    /// The eye of that stage and the direction of the boundary from it (exact: the
+    /// direction of a walk event or a range end from that eye).
     eye: QueryPoint,
-    dir: (i128, i128),
+    angle: Angle,
     /// Branch index of the object hit by that stage.
     level: u8,
     /// The vertex that caused the boundary, if no vertex is found by the rule.
     fallback: Option<u32>,
 }
 
-/// A boundary between pieces: its primary angle is computed from the rule
-/// ([`Tree::radians`]) only if it starts an interval.
-#[derive(Clone, Copy, Debug)]
-struct Boundary {
-    exact: Option<Angle>,
-    rule: Rule,
+impl Boundary {
+    /// The exact primary angle, for a boundary of the primary stage.
+    fn exact(&self) -> Option<Angle> {
+        (self.stage == 0).then_some(self.angle)
+    }
+
+    /// The direction from the stage's eye.
+    fn dir(&self) -> (i128, i128) {
+        self.angle.vector()
+    }
 }
 
 /// An exact open range of directions from an eye with the object seen over it, `from`
@@ -242,14 +251,11 @@ impl Piece {
             to: Dir::at(Angle::ZERO),
             ceiling: None,
             boundary: Boundary {
-                exact: None,
-                rule: Rule {
-                    stage: 0,
-                    eye: QueryPoint::default(),
-                    dir: (0, 0),
-                    level: 0,
-                    fallback: None,
-                },
+                stage: 0,
+                eye: QueryPoint::default(),
+                angle: Angle::ZERO,
+                level: 0,
+                fallback: None,
             },
         }
     }
@@ -369,7 +375,7 @@ impl<F: Frames> Stacks<F> {
     }
 
     /// The lengths of the hop and branch stacks: where a boundary arises (its stage and
-    /// level, [`Rule`]).
+    /// level, [`Boundary`]).
     fn lengths(&self) -> Result<(u8, u8), WalkError> {
         let len = |n: usize| u8::try_from(n).map_err(|_| WalkError::TreeTooDeep);
         Ok((len(self.hops.len())?, len(self.branch.len())?))
@@ -985,7 +991,7 @@ pub fn ray_tree<S: Storage>(
         // last interval, which ends there (the primary stage: no hops).
         Some(i) => {
             if let Some(b) = first {
-                let rule = tree.event_boundary((0, 0), q, &b).rule;
+                let rule = tree.event_boundary((0, 0), q, &b);
                 i.exact_start = Some(b.angle);
                 i.start_vertex = tree.resolve(&[], &rule, &left, &i.branch);
             }
@@ -1217,14 +1223,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             seen: self.complex.ceiling(start),
             cur_from: Dir::at(f),
             cur_boundary: Boundary {
-                exact: Some(f),
-                rule: Rule {
-                    stage: 0,
-                    eye: q,
-                    dir: f.vector(),
-                    level: 0,
-                    fallback: None,
-                },
+                stage: 0,
+                eye: q,
+                angle: f,
+                level: 0,
+                fallback: None,
             },
             close_on_event,
             closed_on_boundary: false,
@@ -1435,14 +1438,11 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// The boundary made by a walk event at the given stage (hops) and level (branch index).
     fn event_boundary(&self, (stage, level): (u8, u8), eye: QueryPoint, d: &Dir) -> Boundary {
         Boundary {
-            exact: (stage == 0).then_some(d.angle),
-            rule: Rule {
-                stage,
-                eye,
-                dir: d.angle.vector(),
-                level,
-                fallback: d.pointed.then_some(d.index),
-            },
+            stage,
+            eye,
+            angle: d.angle,
+            level,
+            fallback: d.pointed.then_some(d.index),
         }
     }
 }
@@ -1541,7 +1541,7 @@ impl<K: FnMut(Interval<'_>)> Emitter<'_, K> {
         };
         let start_vertex = match left {
             Some(left) if self.vertices && left != branch => {
-                tree.resolve(hops, &boundary.rule, left, branch)
+                tree.resolve(hops, boundary, left, branch)
             }
             _ => None,
         };
@@ -1549,9 +1549,13 @@ impl<K: FnMut(Interval<'_>)> Emitter<'_, K> {
             start: if first {
                 self.f.radians()
             } else {
-                tree.radians(hops, &boundary.rule)
+                tree.radians(hops, boundary)
             },
-            exact_start: if first { Some(self.f) } else { boundary.exact },
+            exact_start: if first {
+                Some(self.f)
+            } else {
+                boundary.exact()
+            },
             branch: heapless::Vec::from_slice(branch).map_err(|_| WalkError::TreeTooDeep)?,
             start_vertex,
         };
@@ -1618,11 +1622,11 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     /// The primary angle (radians, `f64`) of a boundary: its direction intersected with
     /// each hop's edge line, continued from the previous eye.
-    fn radians(&self, hops: &[Hop], rule: &Rule) -> f64 {
+    fn radians(&self, hops: &[Hop], rule: &Boundary) -> f64 {
         let d = self.map_dir(
             hops.get(..rule.stage.into()).unwrap_or(hops),
             rule.eye,
-            rule.dir,
+            rule.dir(),
         );
         let a = libm::atan2(d.1, d.0);
         let tau = 2.0 * core::f64::consts::PI;
@@ -1673,7 +1677,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     fn resolve(
         &self,
         hops: &[Hop],
-        rule: &Rule,
+        rule: &Boundary,
         left: &[ObjectId],
         right: &[ObjectId],
     ) -> Option<usize> {
@@ -1683,7 +1687,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         // once: most stages hold no candidate vertex on the ray, which different residues
         // prove; the 1024-bit mapping is made only when a candidate passes.
         let mut residues = [None::<(u64, u64)>; MAX_STAGES];
-        let mut r = Some((residue_i128(rule.dir.0), residue_i128(rule.dir.1)));
+        let dir = rule.dir();
+        let mut r = Some((residue_i128(dir.0), residue_i128(dir.1)));
         for st in (0..stages).rev() {
             let cur = hops.get(st + 1).map_or(rule.eye, |h| h.prev);
             r = r.and_then(|r| self.map_hop_residue(hops.get(st)?, cur, r));
@@ -1726,7 +1731,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
                 let best = nearest_on_ray(candidates, |v| {
                     let w = diff(self.qpoint(v), eye);
-                    (cross(rule.dir, w) == 0).then_some(rule.dir.0 * w.0 + rule.dir.1 * w.1)
+                    (cross(dir, w) == 0).then_some(dir.0 * w.0 + dir.1 * w.1)
                 });
                 return best.or(rule.fallback.map(|v| v as usize));
             }
@@ -1751,7 +1756,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 }),
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
-                    let d = self.map_dir(later, rule.eye, rule.dir);
+                    let d = self.map_dir(later, rule.eye, rule.dir());
                     nearest_on_ray(candidates, |v| {
                         let w = diff(self.qpoint(v), eye);
                         let wf = (to_f64(w.0), to_f64(w.1));
@@ -1770,9 +1775,10 @@ impl<S: Storage> Tree<'_, '_, S> {
 
     /// The boundary direction of `rule` at every stage before the last, mapped back hop by
     /// hop exactly ([`Tree::map_hop_exact`]); `None` past `Wide`'s budget.
-    fn map_exact(&self, hops: &[Hop], rule: &Rule) -> [Option<(Wide, Wide)>; MAX_STAGES] {
+    fn map_exact(&self, hops: &[Hop], rule: &Boundary) -> [Option<(Wide, Wide)>; MAX_STAGES] {
         let mut mapped = [None; MAX_STAGES];
-        let mut d = Some((Wide::from_i128(rule.dir.0), Wide::from_i128(rule.dir.1)));
+        let (x, y) = rule.dir();
+        let mut d = Some((Wide::from_i128(x), Wide::from_i128(y)));
         for st in (0..hops.len()).rev() {
             let cur = hops.get(st + 1).map_or(rule.eye, |h| h.prev);
             d = d.and_then(|d| self.map_hop_exact(hops.get(st)?, cur, &d));
@@ -4100,8 +4106,8 @@ mod tests {
     #[test]
     fn fresh_range_walk_pieces_are_the_written_ones() {
         use super::{
-            cross, ranked, Boundary, Cluster, Dir, ExactSlots, Frame, Frames, Level, Piece, Rule,
-            Stacks, Tree, Wide,
+            cross, ranked, Boundary, Cluster, Dir, ExactSlots, Frame, Frames, Level, Piece, Stacks,
+            Tree, Wide,
         };
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
@@ -4143,14 +4149,11 @@ mod tests {
                     .flat_map(|t| [(t.clone(), from.clone()), (t, exact.clone())])
                 {
                     let first = Boundary {
-                        exact: None,
-                        rule: Rule {
-                            stage: 0,
-                            eye: q,
-                            dir: from.angle.vector(),
-                            level: 0,
-                            fallback: Some(h as u32),
-                        },
+                        stage: 0,
+                        eye: q,
+                        angle: from.angle,
+                        level: 0,
+                        fallback: Some(h as u32),
                     };
                     let level = Level {
                         eye: q,
