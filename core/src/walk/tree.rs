@@ -289,7 +289,7 @@ struct Tree<'a, 's, S: Storage> {
 /// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
 /// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
 /// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `448·N + 600·H + 520` bytes — `N` frames of 448 bytes, per hop 56 bytes and the
+/// x86-64: `416·N + 600·H + 520` bytes — `N` frames of 416 bytes, per hop 56 bytes and the
 /// 1024-bit exact directions of its mapped range ends (544 bytes, see [`Frames::Exacts`]),
 /// and the branch, the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
@@ -1320,7 +1320,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return Ok(());
             };
             // A piece is written in place and resolved by reference, an edge resolved where
-            // it is made: every move of a piece (176 bytes) is a copy.
+            // it is made: every move of a piece (128 bytes) is a copy.
             match top {
                 Frame::Primary(w) => {
                     let level = w.level;
