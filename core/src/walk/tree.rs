@@ -189,18 +189,17 @@ impl Dir {
     }
 }
 
-/// How the vertex of a boundary is found once the branches on both sides are known (the
-/// reference's rule): among the stages of the ray at the boundary (the primary stage, then
-/// one per hop), the first one whose ray, beyond its origin, holds a vertex of the object
-/// that stage hits on either side; the vertex nearest to that stage's eye. Every stage is
-/// tested exactly, earlier ones on the boundary direction mapped back through the hops in
-/// 1024-bit integers ([`Tree::map_hop_exact`], up to 9 hops); beyond that in `f64` with a
-/// relative tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
-/// `boundary_vertex_mirror_corner.rs`).
+/// A boundary between pieces: its primary angle is computed from it ([`Tree::radians`])
+/// only if it starts an interval. 56 bytes: a tree keeps one per frame.
 ///
-/// A boundary between pieces, with what this rule needs: its primary angle is computed
-/// from it ([`Tree::radians`]) only if it starts an interval. 56 bytes: a tree keeps one
-/// per frame.
+/// Its vertex is found once the branches on both sides are known (the reference's rule):
+/// among the stages of the ray at the boundary (the primary stage, then one per hop), the
+/// first one whose ray, beyond its origin, holds a vertex of the object that stage hits on
+/// either side; the vertex nearest to that stage's eye. Every stage is tested exactly,
+/// earlier ones on the boundary direction mapped back through the hops in 1024-bit
+/// integers ([`Tree::map_hop_exact`], up to 9 hops); beyond that in `f64` with a relative
+/// tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
+/// `boundary_vertex_mirror_corner.rs`).
 #[derive(Clone, Copy, Debug)]
 struct Boundary {
     /// The number of hops up to the stage where the boundary arises: a prefix of the
