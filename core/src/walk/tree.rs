@@ -288,7 +288,7 @@ struct Tree<'a, 's, S: Storage> {
 /// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
 /// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
 /// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `416·N + 600·H + 520` bytes — `N` frames of 416 bytes, per hop 56 bytes and the
+/// x86-64: `400·N + 600·H + 520` bytes — `N` frames of 400 bytes, per hop 56 bytes and the
 /// 1024-bit exact directions of its mapped range ends (544 bytes, see [`Frames::Exacts`]),
 /// and the branch, the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
@@ -772,7 +772,7 @@ struct EdgePiece {
 /// lies on one exact ray (and, for the primary walk, on one lap).
 struct Events {
     walker: Walker,
-    peek: Option<(Step, u8)>,
+    peek: Option<Peeked>,
     /// Only steps that can change the primary view (tangent vertex ahead of the eye).
     ahead_only: bool,
     over: bool,
@@ -780,6 +780,41 @@ struct Events {
     /// a step is an `Option` and the error is checked once per cluster (−0.3 %
     /// instructions in the mixed frame); every later cluster reports it, as the walker would.
     failed: bool,
+}
+
+/// The step [`Events`] looked ahead to, with its lap: a step that counts, so with a
+/// vertex, kept as a `u32` (40 bytes, not a `Step`'s 56 with the lap: a tree keeps one per
+/// frame).
+#[derive(Clone, Copy)]
+struct Peeked {
+    angle: Angle,
+    vertex: u32,
+    cylinder: CylinderId,
+    ahead: bool,
+    lap: u8,
+}
+
+impl Peeked {
+    /// `None` for a step without a vertex or with one past `u32` (never: a scene has at
+    /// most `MAX_VERTICES`).
+    fn of(s: &Step, lap: u8) -> Option<Peeked> {
+        Some(Peeked {
+            angle: s.angle,
+            vertex: u32::try_from(s.vertex?).ok()?,
+            cylinder: s.cylinder,
+            ahead: s.ahead,
+            lap,
+        })
+    }
+
+    fn step(&self) -> Step {
+        Step {
+            angle: self.angle,
+            vertex: Some(self.vertex as usize),
+            ahead: self.ahead,
+            cylinder: self.cylinder,
+        }
+    }
 }
 
 /// A cluster: the first and last step on one exact ray (in walk order) and its lap.
@@ -878,11 +913,12 @@ impl Events {
         // The step ending the last cluster is this one's first: taken here, not through
         // `step`, whose walker costs more than the step it returns.
         let mut open = match self.peek.take() {
-            Some((first, lap)) => {
+            Some(p) => {
+                let first = p.step();
                 *out = Cluster {
                     first,
                     last: first,
-                    lap,
+                    lap: p.lap,
                 };
                 true
             }
@@ -901,7 +937,10 @@ impl Events {
             } else if l == out.lap && s.angle.cmp_exact(&out.first.angle) == Ordering::Equal {
                 out.last = s;
             } else {
-                self.peek = Some((s, l));
+                self.peek = Peeked::of(&s, l);
+                // A step it cannot keep (never) fails the walk rather than drop it.
+                self.failed |= self.peek.is_none();
+                self.over |= self.peek.is_none();
                 break;
             }
         }
