@@ -136,6 +136,15 @@ fn quick_tiny_run_writes_every_table_and_plot() {
         .find(|t| t[0].starts_with("exact predicates on every stress family"))
         .unwrap();
     assert_eq!(exact[3], "met", "{exact:?}");
+    // The device-format issue's walk RAM is reported, whatever its verdict.
+    let tree = targets
+        .iter()
+        .find(|t| t[0].starts_with("depth-5 ray-tree walk without a heap"))
+        .unwrap();
+    assert!(
+        tree[2].ends_with("with refraction and screens)"),
+        "{tree:?}"
+    );
 
     // Every plot exists, is a non-empty SVG, and is linked from the markdown; no others.
     let mut linked = BTreeSet::new();

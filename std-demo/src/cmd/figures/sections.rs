@@ -560,6 +560,39 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             met: None,
         },
     };
+    // The RAM of a depth-5 ray tree walked without a heap: the scratch of its frames and
+    // hops (`TreeScratch<N, H>`, N = 2·5 + 1 and H = 5 through mirrors only; N = 3·5 + 4
+    // and H = 10 with refraction and screens), as the type is on this machine.
+    const TREE_LIMIT: usize = 2 * 1024;
+    let mirrors = core::mem::size_of::<vcx::walk::TreeScratch<11, 5>>();
+    let all = core::mem::size_of::<vcx::walk::TreeScratch<19, 10>>();
+    let _ = write!(
+        notes,
+        " Ray-tree RAM: a depth-5 tree walked without a heap (`walk::frame_tree_into`) \
+         needs a `TreeScratch<11, 5>` through mirrors only, {} bytes, and a \
+         `TreeScratch<19, 10>` with refraction and screens, {} bytes (`size_of` on this \
+         machine), besides its call stack and output buffer (ARCHITECTURE.md, \"RAM of a \
+         ray tree\"). Target of the device-format issue: a depth-5 walk in under 2 KiB — {}: \
+         {}× the target.",
+        thousands(mirrors),
+        thousands(all),
+        if mirrors < TREE_LIMIT {
+            "**met**"
+        } else {
+            "**not met**"
+        },
+        ratio_text(mirrors as f64 / TREE_LIMIT as f64),
+    );
+    let tree_target = Target {
+        what: "depth-5 ray-tree walk without a heap, through mirrors (Device format sizes)".into(),
+        target: "< 2 KiB (2,048 bytes)".into(),
+        measured: format!(
+            "{} bytes ({} with refraction and screens)",
+            thousands(mirrors),
+            thousands(all)
+        ),
+        met: Some(mirrors < TREE_LIMIT),
+    };
     Ok(Output {
         caption: format!(
             "File bytes of the binary complex format (`docs/format.md`), as encoded by `vcx \
@@ -607,7 +640,7 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
                 series("with history", with),
             ],
         }],
-        targets: vec![t],
+        targets: vec![t, tree_target],
     })
 }
 
