@@ -138,9 +138,8 @@ impl Dir {
     }
 
     /// The vertex this end points at.
-    #[cfg(any(feature = "mirrors", feature = "refraction"))]
-    fn pointed(&self) -> Option<usize> {
-        self.pointed.then_some(self.index as usize)
+    fn points_at(&self) -> Option<u32> {
+        self.pointed.then_some(self.index)
     }
 }
 
@@ -1480,7 +1479,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             eye,
             angle: d.angle,
             level,
-            fallback: d.pointed.then_some(d.index),
+            fallback: d.points_at(),
         }
     }
 }
@@ -2740,7 +2739,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         hop: &Hop,
         mirror: bool,
     ) -> Result<(), WalkError> {
-        if let Some(v) = end.pointed() {
+        if let Some(v) = end.points_at().map(|v| v as usize) {
             if v == hop.a || v == hop.b {
                 *end = self.toward(hop.next, v);
                 return Ok(());
