@@ -1,16 +1,16 @@
 //! The binary complex format (`vcx::format`, `docs/format.md`) never trusts its input:
-//! arbitrary bytes, and valid files of degenerate scenes (whole, or made opaque and pruned
-//! to a box: region files) with bytes flipped, cut short and (optionally) the checksum
-//! recomputed so the structural checks are reached. Decoding
-//! must return `Ok` or `Err`, never panic, hang or allocate without bound; on `Ok` the
-//! complex passes `validate` and a trace walks it (or reports a point that is not free).
+//! arbitrary bytes, and valid files of degenerate scenes (whole, or pruned to a box: region
+//! files) with bytes flipped, cut short and (optionally) the checksum recomputed so the
+//! structural checks are reached. Decoding must return `Ok` or `Err`, never panic, hang or
+//! allocate without bound; on `Ok` the complex passes `validate`, and a trace and a ray
+//! tree of depth 2 walk it (or report an error).
 #![no_main]
 
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
 use vcx::format::{self, decode, EncodeOptions};
 use vcx::partition::{build_by_sweep, Region};
-use vcx::{Material, Point, QueryPoint, Scene};
+use vcx::{Point, QueryPoint, Scene};
 use vcx_tests::generators::SceneSpec;
 
 #[derive(Debug, Arbitrary)]
@@ -29,26 +29,9 @@ enum Input {
         /// Store every cylinder (version 1, or 2 with a region) instead of replaying them
         /// (version 3, or 4 with a region).
         explicit_cylinders: bool,
-        /// Prune to a box (corners in 256ths of the scene's bounding box), the scene made
-        /// opaque.
+        /// Prune to a box (corners in 256ths of the scene's bounding box).
         region: Option<[u8; 4]>,
     },
-}
-
-/// The scene with every object opaque (a region needs it).
-fn opaque(s: &Scene) -> Option<Scene> {
-    let sr = s.as_ref();
-    let polys: Vec<Vec<Point>> = sr
-        .objects()
-        .iter()
-        .map(|o| {
-            let p = sr.polygon(o);
-            (0..p.len())
-                .filter_map(|j| p.get(o.written_vertex_id(j)).copied())
-                .collect()
-        })
-        .collect();
-    Scene::new(polys.iter().map(|p| (Material::Opaque, &p[..]))).ok()
 }
 
 /// A box in `s`'s bounding box, its corners at `k / 256` of its sides.
@@ -81,10 +64,7 @@ fn file(
     explicit_cylinders: bool,
     region: Option<[u8; 4]>,
 ) -> Option<Vec<u8>> {
-    let mut s = scene.realize().scene().ok()?;
-    if region.is_some() {
-        s = opaque(&s)?;
-    }
+    let s = scene.realize().scene().ok()?;
     let mut c = build_by_sweep(&s.as_ref()).ok()?;
     if let Some(k) = region {
         c = c.prune_to_region(&s.as_ref(), region_in(&s, k)?).ok()?;
@@ -142,5 +122,6 @@ fuzz_target!(|input: Input| {
         .or(QueryPoint::from_raw(0, 0));
     if let Some(q) = q {
         let _ = loaded.complex.walk_trace(&s, q, |_| {});
+        let _ = vcx::walk::ray_tree(&loaded.complex, &s, q, 2);
     }
 });

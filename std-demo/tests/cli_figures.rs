@@ -16,7 +16,7 @@ use vcx_demo::stress::{Family, SCALES};
 const VCX: &str = env!("CARGO_BIN_EXE_vcx");
 
 /// The sections of BENCHMARKS.md, in order (the start of each `## ` heading).
-const SECTIONS: [&str; 14] = [
+const SECTIONS: [&str; 15] = [
     "Targets",
     "Construction",
     "Views",
@@ -24,6 +24,7 @@ const SECTIONS: [&str; 14] = [
     "Frames",
     "Device format sizes",
     "Device format sizes with a region",
+    "Regions where ray trees leave the box",
     "Run time against error",
     "Numerical stability",
     "Fig. 11",

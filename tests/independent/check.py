@@ -15,8 +15,8 @@ checks:
   against an exact ray tracer by virtual eyes (screens transparent; while the depth lasts,
   mirrors reflect and refractive objects refract by the tangent law of DESIGN.md, entry
   and exit);
-* `build --region` on an all-opaque copy of the scene: views from inside the box (its
-  free corners included) from the file, the same way.
+* `build --region` on the scene, or on an all-opaque copy of it: views of `--depth` from
+  inside the box (its free corners included) from the file, the same way.
 
 Two families: `general` (random polygons on the 1/1024 grid, or `--grid 65536`: the scene
 grid itself) and `lattice` (axis-aligned boxes and right triangles on the integer
@@ -305,33 +305,35 @@ def check_scene(args, family, seed, tmp, tally):
 
 
 def check_region(args, rng, objs, lattice, tmp, where, tally):
-    """`build --region`: the same scene, all opaque (regions refuse ray trees), kept for a
-    box of a third of the scene's side; views from inside the box (its corners included
-    when free) against exact ray shooting."""
+    """`build --region`: the same scene, as it is (ray trees of `--depth`) or all opaque (a
+    coin toss per scene), kept for a box of a third of the scene's side; views from inside
+    the box (its corners included when free) against the exact ray tracer."""
     side = F(args.size) / 3
     x0, y0 = (F(rng.randint(0, int(2 * side))) for _ in range(2))
     (bx0, by0), (bx1, by1) = place(args, x0, y0), place(args, x0 + side, y0 + side)
-    opaque = [dict(o, material="opaque") for o in objs]
+    if rng.random() < 0.5:
+        objs = [dict({k: v for k, v in o.items() if k != "eta"}, material="opaque") for o in objs]
+        where += " (all opaque)"
     path = os.path.join(tmp, "region.json")
     with open(path, "w") as f:
-        json.dump({"objects": [{"material": "opaque", "vertices": [[float(x), float(y)] for x, y in o["vertices"]]}
-                               for o in opaque]}, f)
+        json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
+                                    vertices=[[float(x), float(y)] for x, y in o["vertices"]]) for o in objs]}, f)
     box = "%r,%r,%r,%r" % (float(bx0), float(by0), float(bx1), float(by1))
     out = os.path.join(tmp, "region.vcx")
     vcx(args.vcx, "build", path, "--region", box, "-o", out)
-    points = [(x, y) for x, y in ((bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1)) if is_free(opaque, x, y)]
+    points = [(x, y) for x, y in ((bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1)) if is_free(objs, x, y)]
     for _ in range(10000):
         if len(points) >= args.views:
             break
-        x, y = free_point(rng, opaque, args, lattice)
+        x, y = free_point(rng, objs, args, lattice)
         if bx0 <= x <= bx1 and by0 <= y <= by1:
             points.append((x, y))
     at = os.path.join(tmp, "region.txt")
     with open(at, "w") as f:
         f.writelines("%r,%r\n" % (float(x), float(y)) for x, y in points)
-    views = vcx(args.vcx, "view", out, "--at-file", at, "--json").splitlines()
+    views = vcx(args.vcx, "view", out, "--at-file", at, "--depth", str(args.depth), "--json").splitlines()
     tally["region viewpoints"] += len(points)
-    return check_views(args, rng, opaque, points, views, None, where + " --region " + box, tally)
+    return check_views(args, rng, objs, points, views, None, where + " --region " + box, tally)
 
 
 def check_views(args, rng, objs, points, views, field, where, tally):

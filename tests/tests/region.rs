@@ -16,13 +16,15 @@ use vcx::format::{
     self, decode, decode_into, encode, encode_region, EncodeOptions, FormatError, Header,
 };
 use vcx::format::{SceneObject, Scratch, BLANK_CYLINDER, BLANK_VERTEX};
+use vcx::geom::predicates::Direction;
 use vcx::partition::{
     build_by_sweep, BorderSizes, Complex, ComplexError, Region, RegionError, Slices, ZERO_SLOTS,
 };
+use vcx::walk::{frame_tree, frame_tree_into, ray_tree, TreeInterval, TreeScratch};
 use vcx::walk::{view, view_into, ViewInterval, WalkError};
 use vcx::{Material, ObjectId, Point, QueryPoint, Scene, SceneRef, SubScene};
 use vcx_demo::{generate, SceneKind};
-use vcx_tests::generators::compare_view;
+use vcx_tests::generators::{compare_ray_tree, compare_view};
 
 /// Scale of the randomized checks: `VCX_LONG=1` multiplies it by 20.
 fn scale() -> usize {
@@ -286,8 +288,11 @@ fn for_degenerate_scenes(
     assert!(done >= 30, "only {done} degenerate scenes");
 }
 
+/// Scenes with mirrors, refractive objects and screens are pruned too, keeping every
+/// cylinder whose floor is one of them (the walks of ray trees behind it); a pruned
+/// complex is not pruned again.
 #[test]
-fn pruning_refuses_secondary_rays_and_pruned_complexes() {
+fn secondary_sheets_are_kept_and_pruned_complexes_refused() {
     let sq = |x: i32| {
         [
             Point::from_raw(x << 16, 0).unwrap(),
@@ -298,6 +303,7 @@ fn pruning_refuses_secondary_rays_and_pruned_complexes() {
     let (a, b) = (sq(0), sq(3));
     let r = region(0, 0, 1 << 16, 1 << 16);
     for m in [
+        Material::Opaque,
         Material::Mirror,
         Material::Screen,
         Material::Refractive {
@@ -305,19 +311,211 @@ fn pruning_refuses_secondary_rays_and_pruned_complexes() {
         },
     ] {
         let s = Scene::new([(Material::Opaque, &a[..]), (m, &b[..])]).unwrap();
-        let c = build_by_sweep(&s.as_ref()).unwrap();
+        let sr = s.as_ref();
+        let c = build_by_sweep(&sr).unwrap();
+        let p = c.prune_to_region(&sr, r).unwrap();
+        let behind = |c: &Complex| {
+            c.cylinders()
+                .iter()
+                .filter(|c| c.floor == Some(ObjectId(1)))
+                .count()
+        };
+        if m != Material::Opaque {
+            assert_eq!(behind(&p), behind(&c), "{m:?}");
+        }
         assert_eq!(
-            c.prune_to_region(&s.as_ref(), r).unwrap_err(),
-            RegionError::SecondaryRays { object: 1 }
+            p.prune_to_region(&sr, r).unwrap_err(),
+            RegionError::AlreadyPruned
         );
     }
-    let s = Scene::new([(Material::Opaque, &a[..]), (Material::Opaque, &b[..])]).unwrap();
-    let c = build_by_sweep(&s.as_ref()).unwrap();
-    let p = c.prune_to_region(&s.as_ref(), r).unwrap();
-    assert_eq!(
-        p.prune_to_region(&s.as_ref(), r).unwrap_err(),
-        RegionError::AlreadyPruned
+}
+
+/// Ray trees as comparable rows: start angle (bits), exact start direction, branch,
+/// boundary vertex.
+type TreeKey = Vec<(u64, Option<(i128, i128)>, Vec<ObjectId>, Option<usize>)>;
+
+fn tree_key(t: Result<Vec<TreeInterval>, WalkError>) -> Result<TreeKey, WalkError> {
+    t.map(|t| {
+        t.into_iter()
+            .map(|i| {
+                (
+                    i.start.to_bits(),
+                    i.exact_start.map(|a| a.vector()),
+                    i.branch,
+                    i.start_vertex,
+                )
+            })
+            .collect()
+    })
+}
+
+/// A random range of primary directions (the full circle when both ends are equal).
+fn random_range(rng: &mut ChaCha8Rng) -> (Direction, Direction) {
+    let mut d = || loop {
+        if let Some(d) = Direction::new(rng.gen_range(-9..=9), rng.gen_range(-9..=9)) {
+            return d;
+        }
+    };
+    (d(), d())
+}
+
+/// Prunes `c` to `r` and compares, from every viewpoint of `points`, the ray trees of the
+/// pruned complex with the whole complex's, errors included: the full tree to `depth`
+/// and a frame's (`frame_tree`) over a random range; the first `reference` compared
+/// trees also against the exact reference. Points outside are refused. Returns how many
+/// trees were compared.
+fn check_trees(
+    s: &SceneRef<'_>,
+    c: &Complex,
+    r: Region,
+    points: &[QueryPoint],
+    depth: usize,
+    (reference, rng): (usize, &mut ChaCha8Rng),
+) -> usize {
+    let p = c.prune_to_region(s, r).unwrap();
+    p.validate(s)
+        .unwrap_or_else(|e| panic!("pruned complex invalid: {e}"));
+    let mut compared = 0;
+    for &q in points {
+        let full = tree_key(ray_tree(c, s, q, depth));
+        assert_eq!(
+            tree_key(ray_tree(&p, s, q, depth)),
+            full,
+            "tree from {q:?} in {r:?}, depth {depth}"
+        );
+        let (from, to) = random_range(rng);
+        assert_eq!(
+            tree_key(frame_tree(&p, s, q, depth, from, to)),
+            tree_key(frame_tree(c, s, q, depth, from, to)),
+            "frame from {q:?} in {r:?}, depth {depth}, {from:?} to {to:?}"
+        );
+        if full.is_ok() {
+            if compared < reference {
+                compare_ray_tree(s, &p, q, depth.min(2))
+                    .unwrap_or_else(|e| panic!("box {r:?}: {e}"));
+            }
+            compared += 1;
+        }
+    }
+    for q in points_outside(&r) {
+        assert_eq!(
+            ray_tree(&p, s, q, depth).map(|t| t.len()),
+            Err(WalkError::OutsideRegion(r)),
+            "q {q:?} outside {r:?}"
+        );
+    }
+    compared
+}
+
+/// Ray trees (depth 1 to 5) from viewpoints in random boxes, walked in the pruned complex
+/// of hall-of-mirrors and mixed scenes, equal the whole complex's (which `ray_trees.rs`
+/// checks against the reference), and the reference's on the small scenes.
+#[test]
+fn ray_trees_in_the_box_equal_full_and_reference() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let (mut compared, mut kept, mut all) = (0, 0, 0);
+    for (kind, n, seed) in [
+        (SceneKind::Hall, 6, 1),
+        (SceneKind::Hall, 12, 2),
+        (SceneKind::Mixed, 12, 1),
+        (SceneKind::Mixed, 30, 1),
+        (SceneKind::Mixed, 30, 4),
+        (SceneKind::Mixed, 60, 2),
+    ] {
+        let f = generate(kind, n, seed).unwrap();
+        let s = f.scene.as_ref();
+        let c = build_by_sweep(&s).unwrap();
+        for k in 0..5 * scale() {
+            let r = random_box(&s, &mut rng);
+            let points = points_in(&r, 3, &mut rng);
+            let depth = 1 + (k % 5);
+            // The big-rational reference is slow: one tree of depth 1 per small scene.
+            let reference = usize::from(k == 0 && n <= 12);
+            compared += check_trees(&s, &c, r, &points, depth, (reference, &mut rng));
+            kept += c.prune_to_region(&s, r).unwrap().cylinders().len();
+            all += c.cylinders().len();
+        }
+    }
+    assert!(compared > 100, "only {compared} trees");
+    // Opaque floors outside the box's lines are dropped.
+    assert!(kept * 10 < all * 9, "kept {kept} of {all}");
+}
+
+/// The degenerate scenes of the fuzz generators with their materials: ray trees to depth
+/// 2 from random boxes.
+#[test]
+fn ray_trees_of_degenerate_scenes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(29);
+    let (mut done, mut compared) = (0, 0);
+    for _ in 0..600 * scale() {
+        let Some(s) = common::random_spec_scene(&mut rng) else {
+            continue;
+        };
+        let sr = s.as_ref();
+        if sr.is_empty() || sr.objects().iter().all(|o| o.material == Material::Opaque) {
+            continue;
+        }
+        let c = build_by_sweep(&sr).unwrap();
+        for _ in 0..2 {
+            let r = random_box(&sr, &mut rng);
+            let points = points_in(&r, 2, &mut rng);
+            compared += check_trees(&sr, &c, r, &points, 2, (1, &mut rng));
+        }
+        done += 1;
+        if done == 40 * scale() {
+            break;
+        }
+    }
+    assert!(
+        done >= 30 && compared > 100,
+        "{done} scenes, {compared} trees"
     );
+}
+
+/// A region file of a mixed scene: decoded (both decoders), its ray trees equal the whole
+/// complex's, walked without a heap by `frame_tree_into` in caller storage.
+#[test]
+fn ray_trees_from_region_files() {
+    let f = generate(SceneKind::Mixed, 30, 3).unwrap();
+    let s = f.scene;
+    let sr = s.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let (x0, y0, x1, y1) = bbox(&sr);
+    let (w, h) = ((x1 - x0) / 3, (y1 - y0) / 3);
+    let r = region(x0 + w, y0 + h, x1 - w, y1 - h);
+    let v4 = encode_region(&sr, &c, r, &EncodeOptions::default()).unwrap();
+    v4_equals_pruned_v3(&sr, &c, r);
+    let loaded = decode(&v4).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let points = points_in(&r, 30, &mut rng);
+    let mut walked = 0;
+    for &q in &points {
+        let want = tree_key(ray_tree(&c, &sr, q, 5));
+        assert_eq!(
+            tree_key(ray_tree(&loaded.complex, &loaded.scene.as_ref(), q, 5)),
+            want
+        );
+        walked += usize::from(want.is_ok());
+    }
+    assert!(walked > 20, "only {walked}");
+    let (from, to) = (Direction::new(1, 0).unwrap(), Direction::new(0, 1).unwrap());
+    with_decoded::<1024, _>(&v4, |ds, slices, region, _| {
+        assert_eq!(region, Some(r));
+        let mut scratch = Box::new(TreeScratch::<20, 10>::new());
+        for &q in &points {
+            let mut got = Vec::new();
+            let walked = frame_tree_into(slices, ds, q, 5, from, to, &mut scratch, |i| {
+                got.push((i.start.to_bits(), i.branch.to_vec()))
+            });
+            let want = frame_tree(&c, &sr, q, 5, from, to).map(|t| {
+                t.into_iter()
+                    .map(|i| (i.start.to_bits(), i.branch))
+                    .collect::<Vec<_>>()
+            });
+            assert_eq!(walked.map(|()| got), want, "{q:?}");
+        }
+    })
+    .unwrap();
 }
 
 /// The pruned complex of a grid scene, its scene, its region and a free viewpoint in it.
@@ -400,6 +598,72 @@ fn a_missing_cylinder_stops_the_walk() {
         }
     }
     assert!(failed > 0, "no walk needed the dropped cylinder");
+}
+
+/// `p` without its cylinder `k`: later ids shift down, links to it removed. `None` if a
+/// vertex only that cylinder named is left over (the pruned checks refuse it).
+fn without_cylinder(sr: &SceneRef<'_>, p: &Complex, k: usize) -> Option<Complex> {
+    let mut cylinders = p.cylinders().to_vec();
+    cylinders.remove(k);
+    for c in &mut cylinders {
+        for l in [&mut c.left_neighbour, &mut c.right_neighbour] {
+            *l = match *l {
+                Some(id) if id.index() == k => None,
+                Some(id) if id.index() > k => {
+                    vcx::partition::CylinderId::from_index(id.index() - 1)
+                }
+                other => other,
+            };
+        }
+    }
+    Complex::from_region_parts(sr, p.region(), p.vertices().to_vec(), cylinders).ok()
+}
+
+/// A cylinder behind a mirror, refractive object or screen dropped from a pruned mixed
+/// scene: ray trees that need it fail with an error, never a wrong tree (an anchored
+/// walk's start climbs the sheet, whose tilings then have a gap).
+#[test]
+fn a_missing_cylinder_behind_a_mirror_stops_the_tree() {
+    let f = generate(SceneKind::Mixed, 30, 1).unwrap();
+    let sr = f.scene.as_ref();
+    let c = build_by_sweep(&sr).unwrap();
+    let (x0, y0, x1, y1) = bbox(&sr);
+    let (w, h) = ((x1 - x0) / 3, (y1 - y0) / 3);
+    let r = region(x0 + w, y0 + h, x1 - w, y1 - h);
+    let p = c.prune_to_region(&sr, r).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let points = points_in(&r, 40, &mut rng);
+    let full: Vec<_> = points
+        .iter()
+        .map(|&q| tree_key(ray_tree(&c, &sr, q, 3)))
+        .collect();
+    let behind: Vec<usize> = (0..p.cylinders().len())
+        .filter(|&k| {
+            let c = &p.cylinders()[k];
+            c.left != vcx::partition::Wall::Zero
+                && c.floor
+                    .is_some_and(|f| sr.objects()[f.0 as usize].material != Material::Opaque)
+        })
+        .collect();
+    let (mut failed, mut broken_complexes) = (0, 0);
+    for _ in 0..40 {
+        let k = behind[rng.gen_range(0..behind.len())];
+        let Some(broken) = without_cylinder(&sr, &p, k) else {
+            continue;
+        };
+        broken_complexes += 1;
+        for (&q, want) in points.iter().zip(&full) {
+            match tree_key(ray_tree(&broken, &sr, q, 3)) {
+                Ok(t) => assert_eq!(Ok(t), *want, "cylinder {k} dropped, tree from {q:?}"),
+                Err(_) if want.is_ok() => failed += 1,
+                Err(e) => assert_eq!(Err(e), *want),
+            }
+        }
+    }
+    assert!(
+        broken_complexes > 20 && failed > 0,
+        "{broken_complexes} complexes, {failed} failed"
+    );
 }
 
 /// Encoded as version 4 (default) or 2 (`explicit_cylinders`) with the region; both

@@ -867,7 +867,12 @@ impl<S: Storage> super::Complex<S> {
                 },
             };
             if before_right {
-                return Some(*id);
+                // A pruned complex's tiling may lack the cylinder entered: the next one
+                // kept would start after `angle` (a climb of an anchored walk's start
+                // leaving the kept sheet, `partition::region`), so its left wall is checked.
+                let inside = self.region.is_none()
+                    || self.cmp_wall(&borders, scene, f.left, angle) == Some(Ordering::Greater);
+                return inside.then_some(*id);
             }
         }
         None

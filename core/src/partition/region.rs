@@ -56,9 +56,17 @@
 //! meets a missing link (a wrong pruning or a crafted file) stops with
 //! [`WalkError::Corrupt`](crate::walk::WalkError::Corrupt).
 //!
-//! Only primary walks are supported: ray trees leave the box (virtual eyes behind mirrors
-//! and refractive objects, walks past screens), so scenes with any non-opaque object are
-//! refused ([`RegionError::SecondaryRays`]).
+//! **Ray trees.** Behind a mirror, refractive object or screen M, a ray tree walks anchored
+//! to M: the cylinders with floor M, from eyes anywhere (virtual eyes behind mirrors and
+//! refractive objects leave the box; past a screen the eye is the same). So every
+//! cylinder whose floor is such an object is kept (M's sheet entire); the others are
+//! entered only by primary walks from the box, and pruned by the conditions above. An
+//! anchored walk's start climbs M's sheet from M's chain through the tilings of the border
+//! index, which hold the kept cylinders only: a step across a chain whose true answer was
+//! dropped would find the next kept cylinder instead, so a pruned complex checks that the
+//! cylinder found contains the angle ([`Complex::across_from`]) and the climb, never
+//! wrong, falls back to a scan. A scene of mirrors only keeps most of its complex; the
+//! tighter set (lines through the images of the box, to the depth) is not computed.
 
 use crate::geom::{Point, QueryPoint};
 
@@ -115,11 +123,6 @@ impl Region {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[non_exhaustive]
 pub enum RegionError {
-    /// The scene has a mirror, refractive object or screen: ray trees leave the box.
-    SecondaryRays {
-        /// The first such object.
-        object: usize,
-    },
     /// The complex is itself already pruned.
     AlreadyPruned,
 }
@@ -127,11 +130,6 @@ pub enum RegionError {
 impl core::fmt::Display for RegionError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            RegionError::SecondaryRays { object } => write!(
-                f,
-                "object {object} is not opaque: a region keeps only what primary views from \
-                 the box need, and ray trees (mirrors, refraction, screens) leave the box"
-            ),
             RegionError::AlreadyPruned => write!(f, "the complex is already pruned to a region"),
         }
     }
@@ -235,6 +233,14 @@ impl Pruner<'_> {
         self.scene
             .object(o)
             .map_or(&[], |obj| self.scene.polygon(obj))
+    }
+
+    /// Whether the cylinder's floor is a mirror, refractive object or screen: the walks
+    /// of ray trees behind it are anchored to it, from eyes anywhere (module doc).
+    fn behind(&self, c: &Cylinder) -> bool {
+        c.floor
+            .and_then(|f| self.scene.object(f))
+            .is_some_and(|o| o.material != crate::scene::Material::Opaque)
     }
 
     /// Whether the cylinder may be needed by a view from the box (false: proved not).
@@ -380,7 +386,7 @@ impl Pruner<'_> {
     }
 }
 
-/// Which cylinders of `complex` a primary view from a viewpoint in `region` may enter
+/// Which cylinders of `complex` a view or ray tree from a viewpoint in `region` may enter
 /// (module doc: a superset of the exact set, never missing one).
 #[cfg(feature = "alloc")]
 pub fn needed_cylinders<S: super::Storage>(
@@ -395,17 +401,17 @@ pub fn needed_cylinders<S: super::Storage>(
     complex
         .cylinders()
         .iter()
-        .map(|c| pruner.needed(complex, c))
+        .map(|c| pruner.behind(c) || pruner.needed(complex, c))
         .collect()
 }
 
 #[cfg(feature = "alloc")]
 impl Complex {
-    /// The complex pruned to the cylinders a primary view from a viewpoint in `region` may
-    /// enter (module doc of `partition::region`): kept cylinders renumbered with those at
-    /// θ = 0 first, links to dropped ones removed, unused vertices dropped. Views from
-    /// inside the region equal those of the full complex; from outside they are
-    /// [`WalkError::OutsideRegion`](crate::walk::WalkError::OutsideRegion).
+    /// The complex pruned to the cylinders a view or ray tree from a viewpoint in `region`
+    /// may enter (module doc of `partition::region`): kept cylinders renumbered with those
+    /// at θ = 0 first, links to dropped ones removed, unused vertices dropped. Views and
+    /// ray trees from inside the region equal those of the full complex; from outside they
+    /// are [`WalkError::OutsideRegion`](crate::walk::WalkError::OutsideRegion).
     pub fn prune_to_region(
         &self,
         scene: &SceneRef<'_>,
@@ -415,8 +421,8 @@ impl Complex {
         Ok(self.keep_only(scene, region, &keep))
     }
 
-    /// [`needed_cylinders`] for [`Complex::prune_to_region`], after its checks: the
-    /// complex is whole and the scene all opaque.
+    /// [`needed_cylinders`] for [`Complex::prune_to_region`], after its check: the
+    /// complex is whole.
     pub(crate) fn needed_in(
         &self,
         scene: &SceneRef<'_>,
@@ -424,13 +430,6 @@ impl Complex {
     ) -> Result<alloc::vec::Vec<bool>, RegionError> {
         if self.region.is_some() {
             return Err(RegionError::AlreadyPruned);
-        }
-        if let Some(object) = scene
-            .objects()
-            .iter()
-            .position(|o| o.material != crate::scene::Material::Opaque)
-        {
-            return Err(RegionError::SecondaryRays { object });
         }
         Ok(needed_cylinders(self, scene, region))
     }

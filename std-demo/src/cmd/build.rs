@@ -47,15 +47,15 @@
 //! The scene may itself be a `.vcx` file (its scene is rebuilt).
 //!
 //! `--region X0,Y0,X1,Y1` (scene units; a closed box): the viewpoints will stay in this
-//! box, so only the cylinders a view from it can enter are kept
+//! box, so only the cylinders a view or ray tree from it can enter are kept
 //! ([`vcx::partition::Complex::prune_to_region`]; a conservative superset decided
 //! exactly, see `core/src/partition/region.rs`). The summary ends with `; region
 //! X0,Y0,X1,Y1: kept K of C cylinders` (`--stats-json`: `cylinders` is K, plus `region`
 //! `[x0, y0, x1, y1]` and `full_cylinders` C), and `-o` writes format version 4 with the
 //! region: the whole complex as version 3 stores it and a bit per cylinder, whether it is
 //! kept (version 2, every kept cylinder stored, with `--explicit-cylinders`). Such a file has no history: `--history always` with `--region` is an error
-//! (exit status 2), `auto` writes none. Scenes with mirrors, refractive objects or screens
-//! are refused (exit status 2): ray trees leave the box.
+//! (exit status 2), `auto` writes none. Behind mirrors, refractive objects and screens
+//! every cylinder is kept: ray trees walk there from eyes outside the box.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -119,7 +119,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = HistoryChoice::Auto)]
     pub history: HistoryChoice,
     /// Keep only the cylinders views from viewpoints in this box need (`X0,Y0,X1,Y1`,
-    /// scene units; all-opaque scenes only; no history).
+    /// scene units; every cylinder behind a mirror, refractive object or screen is kept;
+    /// no history).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
     pub region: Option<String>,
     /// With `-o`: store every cylinder (format version 1; with `--region` every kept one,
@@ -250,8 +251,8 @@ pub fn run(args: &Args) -> Result<(), Failure> {
         Some(text) => {
             if args.history == HistoryChoice::Always {
                 return Err(Failure::bad_input(
-                    "--region writes no history: a pruned complex has only what primary views \
-                     from the box need (drop --history always)",
+                    "--region writes no history: a pruned complex has only what walks from \
+                     the box need, and point location needs the whole (drop --history always)",
                 ));
             }
             Some(parse_region("--region", text)?)

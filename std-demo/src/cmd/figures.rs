@@ -194,6 +194,11 @@ pub(crate) const FIGURES: &[Figure] = &[
         run: sections::regions,
     },
     Figure {
+        name: "region-trees",
+        title: "Regions where ray trees leave the box (vcx build --region, mirrors, refraction, screens)",
+        run: sections::region_trees,
+    },
+    Figure {
         name: "error",
         title: "Run time against error: the complex against the ray casters (hall and mixed, depth 5)",
         run: fig_error,

@@ -644,6 +644,35 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
     })
 }
 
+/// The box centred on the scene's bounding box with `1/k` of its area (sides / √k).
+fn centred_box(scene: &vcx::SceneRef<'_>, k: u32) -> Result<vcx::partition::Region, Failure> {
+    let (lo, hi) = scene.vertices().iter().fold(
+        ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
+        |(lo, hi), v| {
+            (
+                (lo.0.min(v.x()), lo.1.min(v.y())),
+                (hi.0.max(v.x()), hi.1.max(v.y())),
+            )
+        },
+    );
+    let side = f64::from(k).sqrt();
+    let half = |a: i32, b: i32| ((f64::from(b) - f64::from(a)) / (2.0 * side)) as i64;
+    let (cx, cy) = (
+        (i64::from(lo.0) + i64::from(hi.0)) / 2,
+        (i64::from(lo.1) + i64::from(hi.1)) / 2,
+    );
+    let (hx, hy) = (half(lo.0, hi.0), half(lo.1, hi.1));
+    let corner = |x: i64, y: i64| {
+        vcx::Point::from_raw(
+            i32::try_from(x).map_err(internal)?,
+            i32::try_from(y).map_err(internal)?,
+        )
+        .ok_or_else(|| internal("box corner out of range"))
+    };
+    vcx::partition::Region::new(corner(cx - hx, cy - hy)?, corner(cx + hx, cy + hy)?)
+        .ok_or_else(|| internal("empty box"))
+}
+
 /// `vcx build --region` on the grid scene: file bytes and views from points in the box,
 /// against the whole complex, for centred boxes of 1/4, 1/16 and 1/64 of the scene's area.
 pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
@@ -674,35 +703,9 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         let full = crate::input::from_bytes(path, &full_bytes)?;
         whole.push((f64::from(n), full_bytes.len() as f64));
         whole_explicit.push((f64::from(n), explicit as f64));
-        let (lo, hi) = scene.vertices().iter().fold(
-            ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN)),
-            |(lo, hi), v| {
-                (
-                    (lo.0.min(v.x()), lo.1.min(v.y())),
-                    (hi.0.max(v.x()), hi.1.max(v.y())),
-                )
-            },
-        );
         for (k, curve) in SHARES.iter().zip(curves.iter_mut()) {
             p.step(&format!("grid n={n} region 1/{k}"));
-            // A centred box with 1/k of the bounding box's area: sides / √k.
-            let side = f64::from(*k).sqrt();
-            let half = |a: i32, b: i32| ((f64::from(b) - f64::from(a)) / (2.0 * side)) as i64;
-            let (cx, cy) = (
-                (i64::from(lo.0) + i64::from(hi.0)) / 2,
-                (i64::from(lo.1) + i64::from(hi.1)) / 2,
-            );
-            let (hx, hy) = (half(lo.0, hi.0), half(lo.1, hi.1));
-            let corner = |x: i64, y: i64| {
-                vcx::Point::from_raw(
-                    i32::try_from(x).map_err(internal)?,
-                    i32::try_from(y).map_err(internal)?,
-                )
-                .ok_or_else(|| internal("box corner out of range"))
-            };
-            let region =
-                vcx::partition::Region::new(corner(cx - hx, cy - hy)?, corner(cx + hx, cy + hy)?)
-                    .ok_or_else(|| internal("empty box"))?;
+            let region = centred_box(&scene, *k)?;
             let pruned = build::Built {
                 complex: built
                     .complex
@@ -790,8 +793,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
     Ok(Output {
         caption: format!(
             "`vcx build --region X0,Y0,X1,Y1` keeps only the cylinders a view from a point in \
-             the box can enter (primary walks; scenes with mirrors, refractive objects or \
-             screens are refused). Grid scene `vcx gen grid N --seed {SEED}`, the randomized \
+             the box can enter (primary views here; ray trees in the next section). Grid scene `vcx gen grid N --seed {SEED}`, the randomized \
              construction (seed {BUILD_SEED}) without history, pruned to centred boxes of 1/4, \
              1/16 and 1/64 of the scene's bounding-box area; file bytes as `vcx build -o` \
              encodes them (the whole complex as written by default — version 3, cylinders \
@@ -833,6 +835,151 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             log_y: true,
             series: series_list,
         }],
+        targets: Vec::new(),
+    })
+}
+
+/// `vcx build --region` where ray trees leave the box: the hall of mirrors and the mixed
+/// scene, file bytes and ray trees from points in the box, against the whole complex, for
+/// centred boxes of 1/4, 1/16 and 1/64 of the scene's area.
+pub(super) fn region_trees(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
+    const SHARES: [u32; 3] = [4, 16, 64];
+    const MIXED_N: u32 = 30;
+    let depth = s.mixed_depth;
+    let scenes = [(SceneKind::Hall, s.hall_n), (SceneKind::Mixed, MIXED_N)];
+    p.start(scenes.len() * SHARES.len());
+    let (mut rows, mut shares) = (Vec::new(), Vec::new());
+    for (kind, n) in scenes {
+        let input = json_input(kind, n)?;
+        let scene = input.file.scene.as_ref();
+        let name = format!("{}-{n}.vcx", kind.name());
+        let path = Path::new(&name);
+        let options = BuildOptions {
+            seed: BUILD_SEED,
+            ..Default::default()
+        };
+        let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
+        // What `vcx build -o` writes for such a scene (with history), and without it.
+        let with = build::encode_vcx(path, &scene, &built, true, BUILD_SEED, false)?;
+        let without = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?;
+        let full = crate::input::from_bytes(path, &without)?;
+        for k in SHARES {
+            p.step(&format!("{} region 1/{k}", kind.name()));
+            let region = centred_box(&scene, k)?;
+            let complex = built
+                .complex
+                .prune_to_region(&scene, region)
+                .map_err(internal)?;
+            let behind = complex
+                .cylinders()
+                .iter()
+                .filter(|c| {
+                    c.floor
+                        .and_then(|f| scene.object(f))
+                        .is_some_and(|o| o.material != vcx::Material::Opaque)
+                })
+                .count();
+            let pruned = build::Built {
+                complex,
+                whole: Some(built.complex.clone()),
+                history: None,
+                seconds: built.seconds,
+            };
+            let bytes = build::encode_vcx(path, &scene, &pruned, false, BUILD_SEED, false)?;
+            let boxed = crate::input::from_bytes(path, &bytes)?;
+            let points = bench::Points::Given(bench::random_points_in(
+                &scene,
+                &region,
+                s.views_random,
+                SEED,
+            ));
+            let f = bench::measure_views(&full, &points, depth, s.views_repeat, None)?;
+            let r = bench::measure_views(&boxed, &points, depth, s.views_repeat, None)?;
+            if f.intervals != r.intervals || f.views != r.views {
+                return Err(internal(format!(
+                    "{} box 1/{k}: ray trees from the region file differ from the whole \
+                     complex's ({} against {} intervals per tree)",
+                    kind.name(),
+                    r.intervals,
+                    f.intervals
+                )));
+            }
+            shares.push(r.cylinders as f64 / f.cylinders as f64);
+            let ((x0, y0), (x1, y1)) = (region.min().to_f64(), region.max().to_f64());
+            rows.push(vec![
+                format!("{} {n}", kind.name()),
+                format!("1/{k}"),
+                format!("{x0},{y0},{x1},{y1}"),
+                thousands(with.len()),
+                thousands(without.len()),
+                thousands(bytes.len()),
+                thousands(f.cylinders),
+                thousands(r.cylinders),
+                thousands(behind),
+                format!("{:.1}", f.intervals),
+                format!("{:.1}", f.seconds * 1e6),
+                format!("{:.1}", r.seconds * 1e6),
+            ]);
+        }
+    }
+    let (lo, hi) = shares.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| {
+        (lo.min(x), hi.max(x))
+    });
+    let notes = format!(
+        "Ray trees from the region file equal the whole complex's from every point (checked in \
+         this run: same intervals per tree; `tests/tests/region.rs` compares them interval by \
+         interval on these and random scenes, and with the exact reference). The region keeps \
+         {:.0}–{:.0} % of the cylinders here: every cylinder behind a mirror, refractive \
+         object or screen stays (\"behind\"), since the walks of ray trees behind such an \
+         object start at eyes anywhere (virtual eyes leave the box), and only the others are \
+         pruned as for primary views: the hall, whose walls are mirrors, keeps most of its \
+         complex. What a region saves is RAM, the dropped cylinders (64 bytes each decoded); \
+         its file is the file without history plus a bit per cylinder. A scene with such \
+         objects is written with its history by default (`--history auto`, for the \
+         sheet-anchored point location of `vcx locate`), which is most of that file; ray \
+         trees do not need it, and a region file has none.",
+        100.0 * lo,
+        100.0 * hi
+    );
+    Ok(Output {
+        caption: format!(
+            "`vcx build --region X0,Y0,X1,Y1` on scenes with mirrors, refractive objects and \
+             screens: the hall of mirrors `vcx gen hall {h} --seed {SEED}` and the mixed scene \
+             `vcx gen mixed {MIXED_N} --seed {SEED}`, the randomized construction (seed \
+             {BUILD_SEED}), pruned to centred boxes of 1/4, 1/16 and 1/64 of the scene's \
+             bounding-box area. Bytes: the file `vcx build -o` writes by default (with \
+             history), without history (version 3), and the region file (version 4, no \
+             history). Cylinders: of the whole complex, kept in the region, and of those the \
+             ones behind a mirror, refractive object or screen (floor of that material). \
+             µs per tree: the ray tree of depth {depth} from {r} random free points in the \
+             box (seed {SEED}), the median of each point's best of {rep} runs, from the whole \
+             file without history and from the region file, the same points; intervals: \
+             leaves per tree. Alone: `vcx build S.json --region BOX -o r.vcx; vcx bench views \
+             r.vcx --depth {depth}` and `vcx bench views whole.vcx --depth {depth} --region \
+             BOX`.",
+            h = s.hall_n,
+            r = s.views_random,
+            rep = s.views_repeat,
+        ),
+        table: Table {
+            header: vec![
+                "<scene",
+                "box area",
+                "box",
+                "file, with history",
+                "file, no history",
+                "region file",
+                "cylinders",
+                "kept",
+                "behind",
+                "intervals",
+                "µs / tree whole",
+                "µs / tree region",
+            ],
+            rows,
+        },
+        notes,
+        plots: Vec::new(),
         targets: Vec::new(),
     })
 }
