@@ -1295,7 +1295,9 @@ impl Debug for RayTreeInput {
 }
 
 /// The ray tree of the input's depth from every viewpoint against the reference
-/// ([`compare_ray_tree`]). Returns how many were compared.
+/// ([`compare_ray_tree`]), and the same tree walked with the arc-vertex index and in the
+/// complex pruned to the viewpoints' bounding box (`vcx build --region`). Returns how many
+/// were compared.
 pub fn check_ray_tree(input: &RayTreeInput) -> Result<usize, String> {
     let r = input.scene.realize();
     let scene = r.scene()?;
@@ -1303,19 +1305,51 @@ pub fn check_ray_tree(input: &RayTreeInput) -> Result<usize, String> {
     let c = build_by_sweep(&s).map_err(|e| format!("build_by_sweep: {e}"))?;
     let depth = usize::from(input.depth.clamp(1, 2));
     let c_arcs = c.clone().with_arc_vertices(&s);
+    let points: Vec<_> = input
+        .viewpoints
+        .iter()
+        .filter_map(|v| Some((v, v.point(&r, &s)?)))
+        .collect();
+    let pruned = match region_around(points.iter().map(|&(_, q)| q)) {
+        Some(b) => Some(
+            c.prune_to_region(&s, b)
+                .map_err(|e| format!("prune_to_region {b:?}: {e}"))?,
+        ),
+        None => None,
+    };
     let mut compared = 0;
-    for v in &input.viewpoints {
-        let Some(q) = v.point(&r, &s) else { continue };
+    for &(v, q) in &points {
         compared += usize::from(
             compare_ray_tree(&s, &c, q, depth).map_err(|e| format!("{v:?} depth {depth}: {e}"))?,
         );
-        same_with_arc_vertices(
-            vcx::walk::ray_tree(&c, &s, q, depth),
-            vcx::walk::ray_tree(&c_arcs, &s, q, depth),
-        )
-        .map_err(|e| format!("{v:?} depth {depth}: {e}"))?;
+        let tree = vcx::walk::ray_tree(&c, &s, q, depth);
+        same_with_arc_vertices(&tree, &vcx::walk::ray_tree(&c_arcs, &s, q, depth))
+            .map_err(|e| format!("{v:?} depth {depth}: {e}"))?;
+        if let Some(p) = &pruned {
+            let got = vcx::walk::ray_tree(p, &s, q, depth);
+            if format!("{got:?}") != format!("{tree:?}") {
+                return Err(format!(
+                    "{v:?} depth {depth}, pruned to {:?}:\n whole {tree:?}\n pruned {got:?}",
+                    p.region()
+                ));
+            }
+        }
     }
     Ok(compared)
+}
+
+/// The smallest box on the scene grid holding the points, if any.
+fn region_around(points: impl Iterator<Item = QueryPoint>) -> Option<vcx::partition::Region> {
+    let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
+    for q in points {
+        lo = (lo.0.min(q.x()), lo.1.min(q.y()));
+        hi = (hi.0.max(q.x()), hi.1.max(q.y()));
+    }
+    // Query coordinates are scene coordinates times 2¹⁶: floor and ceiling.
+    let corner = |x: i64, y: i64| Point::from_raw(i32::try_from(x).ok()?, i32::try_from(y).ok()?);
+    let min = corner(lo.0 >> 16, lo.1 >> 16)?;
+    let max = corner(-((-hi.0) >> 16), -((-hi.1) >> 16))?;
+    vcx::partition::Region::new(min, max)
 }
 
 /// The ray tree from `q` to `depth` walked in the complex `c` of the whole scene `s`
