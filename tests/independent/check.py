@@ -256,6 +256,12 @@ def vcx(binary, *args):
     return r.stdout
 
 
+def write_scene(path, objs):
+    with open(path, "w") as f:
+        json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
+                                    vertices=[[float(x), float(y)] for x, y in o["vertices"]]) for o in objs]}, f)
+
+
 def check_scene(args, family, seed, tmp, tally):
     rng = random.Random("%s %d" % (family, seed))
     lattice = family == "lattice"
@@ -263,9 +269,7 @@ def check_scene(args, family, seed, tmp, tally):
     # Near the top of the coordinate range: --scale 1000, or --centre 16000,-16000.
     objs = [dict(o, vertices=[place(args, x, y) for x, y in o["vertices"]]) for o in objs]
     path = os.path.join(tmp, "%s-%d.json" % (family, seed))
-    with open(path, "w") as f:
-        json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
-                                    vertices=[[float(x), float(y)] for x, y in o["vertices"]]) for o in objs]}, f)
+    write_scene(path, objs)
     where = "%s scene %d (%s)" % (family, seed, path)
     bad = []
     stats = json.loads(vcx(args.vcx, "build", path, "--stats-json", "--seed", str(seed)))
@@ -315,9 +319,7 @@ def check_region(args, rng, objs, lattice, tmp, where, tally):
         objs = [dict({k: v for k, v in o.items() if k != "eta"}, material="opaque") for o in objs]
         where += " (all opaque)"
     path = os.path.join(tmp, "region.json")
-    with open(path, "w") as f:
-        json.dump({"objects": [dict({k: float(v) for k, v in o.items() if k == "eta"}, material=o["material"],
-                                    vertices=[[float(x), float(y)] for x, y in o["vertices"]]) for o in objs]}, f)
+    write_scene(path, objs)
     box = "%r,%r,%r,%r" % (float(bx0), float(by0), float(bx1), float(by1))
     out = os.path.join(tmp, "region.vcx")
     vcx(args.vcx, "build", path, "--region", box, "-o", out)

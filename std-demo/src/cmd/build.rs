@@ -118,9 +118,9 @@ pub struct Args {
     /// mirrors, refractive objects or screens).
     #[arg(long, value_enum, default_value_t = HistoryChoice::Auto)]
     pub history: HistoryChoice,
-    /// Keep only the cylinders views from viewpoints in this box need (`X0,Y0,X1,Y1`,
-    /// scene units; every cylinder behind a mirror, refractive object or screen is kept;
-    /// no history).
+    /// Keep only the cylinders views and ray trees from viewpoints in this box need
+    /// (`X0,Y0,X1,Y1`, scene units; every cylinder behind a mirror, refractive object or
+    /// screen is kept; no history).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
     pub region: Option<String>,
     /// With `-o`: store every cylinder (format version 1; with `--region` every kept one,

@@ -793,8 +793,9 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
     Ok(Output {
         caption: format!(
             "`vcx build --region X0,Y0,X1,Y1` keeps only the cylinders a view from a point in \
-             the box can enter (primary views here; ray trees in the next section). Grid scene `vcx gen grid N --seed {SEED}`, the randomized \
-             construction (seed {BUILD_SEED}) without history, pruned to centred boxes of 1/4, \
+             the box can enter (primary views here; ray trees in the next section). Grid \
+             scene `vcx gen grid N --seed {SEED}`, the randomized construction (seed \
+             {BUILD_SEED}) without history, pruned to centred boxes of 1/4, \
              1/16 and 1/64 of the scene's bounding-box area; file bytes as `vcx build -o` \
              encodes them (the whole complex as written by default — version 3, cylinders \
              replayed — and with `--explicit-cylinders`, every cylinder stored; the region \
