@@ -26,11 +26,11 @@
 //! without history). `--history` says whether the file stores the construction history
 //! (the point-location structure of §4.2):
 //!
-//! * `auto` (default): when a walk can need point location from a secondary ray — the
-//!   scene has a mirror, a refractive object or a screen — unless `--method sweep` is
-//!   given (the sweep builds no history);
+//! * `auto` (default): when the scene has a mirror, a refractive object or a screen (for
+//!   point location of rays leaving an object), unless `--method sweep` is given (the
+//!   sweep builds no history);
 //! * `always`: always (with `--method sweep`: an error, exit status 2);
-//! * `never`: never (primary walks start without it).
+//! * `never`: never (walks, primary and ray trees, do not read it).
 //!
 //! A history is written only with the randomized construction, whose live partition is the
 //! file's complex.
@@ -162,8 +162,9 @@ pub fn parse_region(what: &str, text: &str) -> Result<vcx::partition::Region, Fa
         .ok_or_else(|| bad("X0 ≤ X1 and Y0 ≤ Y1 are needed".to_string()))
 }
 
-/// Whether a walk in this scene can need point location from a secondary ray: it has a
-/// mirror, a refractive object or a screen.
+/// Whether rays in this scene can leave an object (point location on its sheet, which
+/// `--history auto` stores the history for): it has a mirror, a refractive object or a
+/// screen. Walks never read the history.
 pub fn needs_history(scene: &SceneRef<'_>) -> bool {
     scene
         .objects()
