@@ -196,7 +196,9 @@ impl Dir {
 /// first one whose ray, beyond its origin, holds a vertex of the object that stage hits on
 /// either side; the vertex nearest to that stage's eye. Every stage is tested exactly,
 /// earlier ones on the boundary direction mapped back through the hops in 1024-bit
-/// integers ([`Tree::map_hop_exact`], up to 9 hops); beyond that in `f64` with a relative
+/// integers ([`Tree::map_hop_exact`], up to 9 hops), later ones (where the boundary's own
+/// stage holds none: a screen's event) mapped forward through the hops of the leaf after
+/// the boundary ([`Tree::resolve_beyond`]); beyond that in `f64` with a relative
 /// tolerance of 10⁻¹² (a tolerance took a vertex 6·10⁻¹³ rad off the ray,
 /// `boundary_vertex_mirror_corner.rs`).
 #[derive(Clone, Copy, Debug)]
@@ -1718,6 +1720,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         left: &[ObjectId],
         right: &[ObjectId],
     ) -> Option<usize> {
+        let all = hops;
         let hops = hops.get(..rule.stage.into())?;
         let stages = hops.len();
         // The boundary direction at every earlier stage modulo P, mapped back hop by hop
@@ -1770,7 +1773,9 @@ impl<S: Storage> Tree<'_, '_, S> {
                     let w = diff(self.qpoint(v), eye);
                     (cross(dir, w) == 0).then_some(dir.0 * w.0 + dir.1 * w.1)
                 });
-                return best.or(rule.fallback.map(|v| v as usize));
+                return best
+                    .or_else(|| self.resolve_beyond(all, rule, left, right))
+                    .or(rule.fallback.map(|v| v as usize));
             }
             // Different residues of `cross(d, w)`'s two products prove it nonzero.
             if let Some(&Some((r0, r1))) = residues.get(st) {
@@ -1825,6 +1830,69 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
         mapped
     }
+    /// [`Tree::resolve`] past the stage where the boundary arises, when that stage holds no
+    /// vertex of the objects its ray hits (the event was a screen's vertex, and screens
+    /// are in no branch): the reference's rule reads the ray on, stage by stage, so the
+    /// boundary direction is mapped forward exactly through the hops of the leaf after the
+    /// boundary (`hops` past the rule's stage: still on the stack, and its chain holds at
+    /// the boundary, where that leaf starts). `None` if no stage has a candidate on its ray,
+    /// or past `Wide`'s budget.
+    fn resolve_beyond(
+        &self,
+        hops: &[Hop],
+        rule: &Boundary,
+        left: &[ObjectId],
+        right: &[ObjectId],
+    ) -> Option<usize> {
+        let (x, y) = rule.dir();
+        let mut d = (Wide::from_i128(x), Wide::from_i128(y));
+        for hop in hops.get(usize::from(rule.stage)..)? {
+            d = self.map_hop_forward(hop, &d)?;
+            let eye = hop.next;
+            let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
+            let se = side(a, b, eye);
+            let best = nearest_on_ray(
+                [left.get(hop.level), right.get(hop.level)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|&id| self.scene.object(id))
+                    .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
+                    .filter(|&v| {
+                        let sw = side(a, b, self.qpoint(v));
+                        sw != Sign::Zero && sw != se
+                    }),
+                |v| {
+                    let w = diff(self.qpoint(v), eye);
+                    (Wide::cross(&d, w)?.sign() == Sign::Zero)
+                        .then(|| Wide::dot(&d, w))
+                        .flatten()
+                },
+            );
+            if best.is_some() {
+                return best;
+            }
+        }
+        None
+    }
+
+    /// The direction `d` from `hop.prev` continued through `hop`: from `hop.next` to the
+    /// hit `X = prev + (num/den)·d` on the edge's line, `(prev − next)·den + num·d` times
+    /// the sign of `den` (a positive multiple). `None` along the edge's line or past
+    /// `Wide`'s budget (bits as [`Tree::map_hop_exact`]).
+    fn map_hop_forward(&self, hop: &Hop, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
+        let a = self.qpoint(hop.a);
+        let e = diff(self.qpoint(hop.b), a);
+        let den = Wide::cross(d, e)?;
+        let negative = match den.sign() {
+            Sign::Zero => return None,
+            s => s == Sign::Negative,
+        };
+        let (num, pn) = (cross(diff(a, hop.prev), e), diff(hop.prev, hop.next));
+        let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
+        let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
+        Some(if negative { (x.neg(), y.neg()) } else { (x, y) })
+    }
+
     /// [`Tree::map_hop_exact`] modulo `P` (`wide::mod_p`), up to sign: `None` when the
     /// hit's denominator may be zero (its residue is), where the exact hop takes the
     /// edge's midpoint instead. Equal exact directions have equal residues up to sign, so
