@@ -7,7 +7,7 @@
 //! mirrors, refractive objects and screens of the mixed example from inside the box equal
 //! the full file's; `vcx bench views` draws its viewpoints in the region.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
@@ -119,6 +119,25 @@ fn region_file_is_smaller_and_inspect_shows_it() {
     assert_eq!(stats["region"], serde_json::json!([30.0, 30.0, 50.0, 50.0]));
 }
 
+/// `vcx view --depth D --json` from `at` in files `a` and `b`: the same exit status and,
+/// where it succeeds, the same intervals (the file name is in the output); how many.
+fn same_views(a: &Path, b: &Path, at: &str, depth: &str) -> usize {
+    let run = |f: &Path| vcx(&["view", s(f), "--at", at, "--depth", depth, "--json"]);
+    let (a, b) = (run(a), run(b));
+    assert_eq!(a.status.code(), b.status.code(), "{at}");
+    if a.status.code() != Some(0) {
+        return 0;
+    }
+    let (va, vb) = (
+        json(&String::from_utf8(a.stdout).unwrap()),
+        json(&String::from_utf8(b.stdout).unwrap()),
+    );
+    assert_eq!(va["intervals"], vb["intervals"], "{at}");
+    let n = va["intervals"].as_array().map_or(0, Vec::len);
+    assert!(n > 0, "{at}");
+    n
+}
+
 #[test]
 fn views_inside_equal_the_full_file_and_outside_fail() {
     let (full, reg) = files();
@@ -133,18 +152,7 @@ fn views_inside_equal_the_full_file_and_outside_fail() {
         "44.75,50",
         "33.3,47.7",
     ] {
-        let a = vcx(&["view", s(&full), "--at", at, "--json"]);
-        let b = vcx(&["view", s(&reg), "--at", at, "--json"]);
-        assert_eq!(a.status.code(), b.status.code(), "{at}");
-        if a.status.code() == Some(0) {
-            // The file name is in the output: compare the views.
-            let (va, vb) = (
-                json(&String::from_utf8(a.stdout).unwrap()),
-                json(&String::from_utf8(b.stdout).unwrap()),
-            );
-            assert_eq!(va["intervals"], vb["intervals"], "{at}");
-            assert!(va["intervals"].as_array().is_some_and(|v| !v.is_empty()));
-        }
+        same_views(&full, &reg, at, "0");
     }
     for at in ["29.99,40", "50.01,40", "40,29.5", "40,60", "0.5,0.5"] {
         fails(
@@ -175,18 +183,7 @@ fn ray_trees_inside_equal_the_json_scene() {
     );
     let mut compared = 0;
     for at in ["20,20", "36,38", "28.5,29.25", "21.75,37.5", "35.9,20.1"] {
-        let a = vcx(&["view", s(&scene), "--at", at, "--depth", "5", "--json"]);
-        let b = vcx(&["view", s(&reg), "--at", at, "--depth", "5", "--json"]);
-        assert_eq!(a.status.code(), b.status.code(), "{at}");
-        if a.status.code() == Some(0) {
-            let (va, vb) = (
-                json(&String::from_utf8(a.stdout).unwrap()),
-                json(&String::from_utf8(b.stdout).unwrap()),
-            );
-            assert_eq!(va["intervals"], vb["intervals"], "{at}");
-            assert!(va["intervals"].as_array().is_some_and(|v| v.len() > 10));
-            compared += 1;
-        }
+        compared += usize::from(same_views(&scene, &reg, at, "5") > 10);
     }
     assert!(compared >= 4, "only {compared} free viewpoints");
     fails(

@@ -39,14 +39,19 @@ struct Encoded {
     with: Vec<u8>,
 }
 
-fn encode(input: &Input, name: &str) -> Result<Encoded, Failure> {
-    let scene = input.file.scene.as_ref();
-    let path = Path::new(name);
+/// `vcx build SCENE` with the default randomized construction (seed 0), validated.
+fn build_ric(scene: &vcx::SceneRef<'_>, path: &Path) -> Result<build::Built, Failure> {
     let options = BuildOptions {
         seed: BUILD_SEED,
         ..Default::default()
     };
-    let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
+    build::build_with(path, scene, build::Method::Ric, &options)
+}
+
+fn encode(input: &Input, name: &str) -> Result<Encoded, Failure> {
+    let scene = input.file.scene.as_ref();
+    let path = Path::new(name);
+    let built = build_ric(&scene, path)?;
     Ok(Encoded {
         seconds: built.seconds,
         without: build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?,
@@ -692,11 +697,7 @@ pub(super) fn regions(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
         let scene = input.file.scene.as_ref();
         let name = format!("grid-{n}.vcx");
         let path = Path::new(&name);
-        let options = BuildOptions {
-            seed: BUILD_SEED,
-            ..Default::default()
-        };
-        let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
+        let built = build_ric(&scene, path)?;
         let full_bytes = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?;
         // The whole complex with every cylinder stored, as version 2 stores a region's.
         let explicit = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, true)?.len();
@@ -855,11 +856,7 @@ pub(super) fn region_trees(s: &Sizes, p: &mut Progress) -> Result<Output, Failur
         let scene = input.file.scene.as_ref();
         let name = format!("{}-{n}.vcx", kind.name());
         let path = Path::new(&name);
-        let options = BuildOptions {
-            seed: BUILD_SEED,
-            ..Default::default()
-        };
-        let built = build::build_with(path, &scene, build::Method::Ric, &options)?;
+        let built = build_ric(&scene, path)?;
         // What `vcx build -o` writes for such a scene (with history), and without it.
         let with = build::encode_vcx(path, &scene, &built, true, BUILD_SEED, false)?;
         let without = build::encode_vcx(path, &scene, &built, false, BUILD_SEED, false)?;
