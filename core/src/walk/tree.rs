@@ -1747,25 +1747,8 @@ impl<S: Storage> Tree<'_, '_, S> {
             } else {
                 level
             };
-            let owners = [left.get(level), right.get(level)];
-            // The vertices of the objects this stage hits on either side, beyond the
-            // stage's origin edge (a ray leaving a mirror or refractive edge).
-            let origin = origin.map(|(ia, ib)| {
-                let (a, b) = (self.qpoint(ia), self.qpoint(ib));
-                (a, b, side(a, b, eye))
-            });
-            let candidates = owners
-                .iter()
-                .enumerate()
-                .filter(|&(k, id)| id.is_some() && !(k == 1 && owners[0] == *id))
-                .filter_map(|(_, id)| self.scene.object(*(*id)?))
-                .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
-                .filter(|&v| {
-                    origin.is_none_or(|(a, b, se)| {
-                        let sw = side(a, b, self.qpoint(v));
-                        sw != Sign::Zero && sw != se
-                    })
-                });
+            let owners = [left.get(level).copied(), right.get(level).copied()];
+            let candidates = self.stage_candidates(eye, origin, owners);
             let later = hops.get(st..).unwrap_or(&[]);
             if later.is_empty() {
                 // The stage where the boundary arises: `i128` suffices (products < 2¹⁰⁸).
@@ -1790,12 +1773,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
             let mapped = mapped.get_or_insert_with(|| self.map_exact(hops, rule));
             let best = match mapped.get(st).and_then(Option::as_ref) {
-                Some(d) => nearest_on_ray(candidates, |v| {
-                    let w = diff(self.qpoint(v), eye);
-                    (Wide::cross(d, w)?.sign() == Sign::Zero)
-                        .then(|| Wide::dot(d, w))
-                        .flatten()
-                }),
+                Some(d) => self.nearest_on_exact_ray(candidates, eye, d),
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
                     let d = self.map_dir(later, rule.eye, rule.dir());
@@ -1848,31 +1826,57 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut d = (Wide::from_i128(x), Wide::from_i128(y));
         for hop in hops.get(usize::from(rule.stage)..)? {
             d = self.map_hop_forward(hop, &d)?;
-            let eye = hop.next;
-            let (a, b) = (self.qpoint(hop.a), self.qpoint(hop.b));
-            let se = side(a, b, eye);
-            let best = nearest_on_ray(
-                [left.get(hop.level), right.get(hop.level)]
-                    .into_iter()
-                    .flatten()
-                    .filter_map(|&id| self.scene.object(id))
-                    .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
-                    .filter(|&v| {
-                        let sw = side(a, b, self.qpoint(v));
-                        sw != Sign::Zero && sw != se
-                    }),
-                |v| {
-                    let w = diff(self.qpoint(v), eye);
-                    (Wide::cross(&d, w)?.sign() == Sign::Zero)
-                        .then(|| Wide::dot(&d, w))
-                        .flatten()
-                },
-            );
+            let owners = [left.get(hop.level).copied(), right.get(hop.level).copied()];
+            let candidates = self.stage_candidates(hop.next, Some((hop.a, hop.b)), owners);
+            let best = self.nearest_on_exact_ray(candidates, hop.next, &d);
             if best.is_some() {
                 return best;
             }
         }
         None
+    }
+
+    /// The vertices of the objects a stage of a boundary's ray hits on either side
+    /// (`owners`, one object looked at once), beyond the stage's origin edge (a ray leaving
+    /// a mirror or refractive edge; global vertex indices) seen from the stage's eye.
+    fn stage_candidates(
+        &self,
+        eye: QueryPoint,
+        origin: Option<(usize, usize)>,
+        owners: [Option<ObjectId>; 2],
+    ) -> impl Iterator<Item = usize> + Clone + '_ {
+        let origin = origin.map(|(ia, ib)| {
+            let (a, b) = (self.qpoint(ia), self.qpoint(ib));
+            (a, b, side(a, b, eye))
+        });
+        let second = owners[1].filter(|&id| owners[0] != Some(id));
+        [owners[0], second]
+            .into_iter()
+            .flatten()
+            .filter_map(|id| self.scene.object(id))
+            .flat_map(|obj| obj.first_vertex()..obj.first_vertex() + obj.len())
+            .filter(move |&v| {
+                origin.is_none_or(|(a, b, se)| {
+                    let sw = side(a, b, self.qpoint(v));
+                    sw != Sign::Zero && sw != se
+                })
+            })
+    }
+
+    /// Of `candidates`, the vertex exactly on the ray from `eye` in the exact direction
+    /// `d`, nearest to `eye`.
+    fn nearest_on_exact_ray(
+        &self,
+        candidates: impl Iterator<Item = usize>,
+        eye: QueryPoint,
+        d: &(Wide, Wide),
+    ) -> Option<usize> {
+        nearest_on_ray(candidates, |v| {
+            let w = diff(self.qpoint(v), eye);
+            (Wide::cross(d, w)?.sign() == Sign::Zero)
+                .then(|| Wide::dot(d, w))
+                .flatten()
+        })
     }
 
     /// The direction `d` from `hop.prev` continued through `hop`: from `hop.next` to the
