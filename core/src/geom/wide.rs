@@ -312,66 +312,6 @@ impl Wide {
     pub(crate) fn dot(u: &(Wide, Wide), v: (i128, i128)) -> Option<Wide> {
         u.0.mul_add(v.0, &u.1, v.1)
     }
-
-    /// `a·b + c·d` for `i128` factors `a`, `c` and `i64` factors `b`, `d`, written to
-    /// `out`: at most 2¹⁹¹, three limbs, always within budget; [`Wide::mul_add`] of
-    /// `Wide::from_i128(a)` without its general loops, and in place (a mapped range end
-    /// computes two, and a `Wide` moved is a 272-byte copy).
-    #[cfg_attr(
-        not(any(feature = "mirrors", feature = "refraction")),
-        allow(dead_code)
-    )]
-    pub(crate) fn mul2_into(a: i128, b: i64, c: i128, d: i64, out: &mut Wide) {
-        let (pn, p) = product_i64(a, b);
-        let (qn, q) = product_i64(c, d);
-        // Limbs from the fourth on stay zero (`out` may have held a longer value).
-        out.mag = [0; LIMBS];
-        let negative = if pn == qn {
-            // No carry out of the three limbs: the sum is at most 2¹⁹¹.
-            let mut carry = 0u128;
-            for (slot, (&x, &y)) in out.mag.iter_mut().zip(p.iter().zip(&q)) {
-                let s = u128::from(x) + u128::from(y) + carry;
-                *slot = s as u64;
-                carry = s >> 64;
-            }
-            pn
-        } else {
-            // Opposite signs: the larger magnitude minus the smaller, with the larger's sign.
-            let (big, small, negative) = match p.iter().rev().cmp(q.iter().rev()) {
-                Ordering::Less => (q, p, qn),
-                _ => (p, q, pn),
-            };
-            let mut borrow = false;
-            for (slot, (&x, &y)) in out.mag.iter_mut().zip(big.iter().zip(&small)) {
-                let (v, b1) = x.overflowing_sub(y);
-                let (v, b2) = v.overflowing_sub(u64::from(borrow));
-                *slot = v;
-                borrow = b1 || b2;
-            }
-            negative
-        };
-        let len = out.mag.get(..3).map_or(0, |m| {
-            m.len() - m.iter().rev().take_while(|&&l| l == 0).count()
-        });
-        out.len = len as u8;
-        out.negative = negative && len > 0;
-    }
-}
-
-/// `a·b` as a sign (negative) and three little-endian limbs of its magnitude (at most
-/// 2¹²⁷ · 2⁶³ = 2¹⁹⁰): two 64-bit partial products.
-#[cfg_attr(
-    not(any(feature = "mirrors", feature = "refraction")),
-    allow(dead_code)
-)]
-fn product_i64(a: i128, b: i64) -> (bool, [u64; 3]) {
-    let (x, y) = (a.unsigned_abs(), u128::from(b.unsigned_abs()));
-    let (lo, hi) = (u128::from(x as u64) * y, (x >> 64) * y);
-    let mid = (lo >> 64) + (hi & u128::from(u64::MAX));
-    // `hi ≤ 2¹²⁶`: the top limb takes the carry without overflowing.
-    let top = (hi >> 64) + (mid >> 64);
-    let negative = (a < 0) != (b < 0) && x != 0 && y != 0;
-    (negative, [lo as u64, mid as u64, top as u64])
 }
 
 impl Ord for Wide {
@@ -454,67 +394,6 @@ mod tests {
 
     fn w(v: i128) -> Wide {
         Wide::from_i128(v)
-    }
-
-    /// The `i128`·`i64` fast path is the general product sum, normalized alike (`==`
-    /// compares values): random lengths and signs, zeros, cancellations and the extremes.
-    #[test]
-    fn mul2_into_is_mul_add() {
-        let check = |a: i128, b: i64, c: i128, d: i64| {
-            let slow = w(a).mul_add(b.into(), &w(c), d.into()).unwrap();
-            // Over a longer value (eight limbs): its limbs must not survive.
-            let mut got = w(-1);
-            for _ in 0..4 {
-                got = got.mul_i128(i128::MAX).unwrap();
-            }
-            Wide::mul2_into(a, b, c, d, &mut got);
-            assert_eq!(got, slow, "{a} {b} {c} {d}");
-        };
-        let edge = [
-            0,
-            1,
-            -1,
-            i128::MAX,
-            i128::MIN,
-            i128::MIN + 1,
-            1 << 64,
-            -(1 << 64),
-        ];
-        let edge64 = [
-            0,
-            1,
-            -1,
-            i64::MAX,
-            i64::MIN,
-            i64::MIN + 1,
-            1 << 32,
-            -(1 << 32),
-        ];
-        for a in edge {
-            for b in edge64 {
-                check(a, b, a, b.wrapping_neg());
-                check(a, b, a.wrapping_neg(), b);
-                check(a, b, a, b);
-                check(a, b, 1, -1);
-                check(1, -1, a, b);
-            }
-        }
-        let mut next = xorshift(0x9e37_79b9_7f4a_7c15u64);
-        let mut value = move || {
-            let v = ((u128::from(next()) << 64 | u128::from(next())) >> (next() % 128)) as i128;
-            if next().is_multiple_of(2) {
-                v
-            } else {
-                v.wrapping_neg()
-            }
-        };
-        for _ in 0..20_000 {
-            let (a, c) = (value(), value());
-            let (b, d) = ((value() >> 64) as i64, value() as i64);
-            check(a, b, c, d);
-            // Equal magnitudes of opposite signs cancel.
-            check(a, b, a.wrapping_neg(), b);
-        }
     }
 
     #[test]

@@ -52,6 +52,13 @@ use {
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 use super::optics;
 
+mod mapped;
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+use mapped::HopChain;
+use mapped::Mapped;
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+use mapped::Terms;
+
 /// One interval of a ray-tree sweep: primary directions from `start` counter-clockwise to
 /// the next interval's start, over which the branch is constant.
 #[cfg(feature = "alloc")]
@@ -97,9 +104,9 @@ struct Dir {
     /// rounded): the exact direction, so that events and vertices exactly on it are
     /// classified exactly (a vertex exactly on a mapped range end is a frequent
     /// degeneracy of grid scenes, `spurious_sliver_diagonal.rs`), as its index in the
-    /// stack of exact directions ([`Stacks::exacts`] flattened: 272 bytes each, so range
-    /// ends, which are moved around a lot, do not carry them; two per hop, at most
-    /// `4·MAX_TREE_DEPTH + 4`). `None` past `Wide`'s budget.
+    /// stack of exact directions ([`Stacks::exacts`] flattened: a [`Mapped`] each, 48
+    /// bytes, so range ends, which are moved around a lot, do not carry them; two per hop,
+    /// at most `4·MAX_TREE_DEPTH + 4`). `None` past `Wide`'s budget.
     #[cfg_attr(
         not(any(feature = "mirrors", feature = "refraction", feature = "screens")),
         allow(dead_code)
@@ -143,20 +150,35 @@ impl Dir {
     }
 }
 
+/// The exact directions of the mapped range ends in use ([`Stacks::exacts`] flattened) and
+/// what rebuilds them: the hops, and the scene's vertices.
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+#[derive(Clone, Copy)]
+struct Ends<'e> {
+    mapped: &'e [Mapped],
+    chain: HopChain<'e>,
+}
+
+#[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
+impl<'e> Ends<'e> {
+    fn new(mapped: &'e [Mapped], hops: &'e [Hop], points: &'e [Point]) -> Self {
+        Ends {
+            mapped,
+            chain: HopChain { hops, points },
+        }
+    }
+}
+
 /// Range ends against exact directions, for anchored walks and splits.
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl Dir {
-    /// The exact direction of this end, from the stack `exacts`.
-    fn exact<'e>(&self, exacts: &'e [(Wide, Wide)]) -> Option<&'e (Wide, Wide)> {
-        exacts.get(usize::from(self.exact?))
-    }
-
     /// The sign of `cross(self, v)`: `Positive` if `v` lies counter-clockwise of this
     /// direction (within a half turn), exactly. Inlined: mostly without an exact direction,
     /// two single widening products (the callers' vectors are `i64`s widened).
     #[inline]
-    fn turn(&self, exacts: &[(Wide, Wide)], v: (i128, i128)) -> Sign {
-        match self.exact(exacts).and_then(|x| Wide::cross_sign(x, v)) {
+    fn turn(&self, ends: Ends<'_>, v: (i128, i128)) -> Sign {
+        let mapped = self.exact.and_then(|i| ends.mapped.get(usize::from(i)));
+        match mapped.and_then(|x| x.turn(ends.chain, v)) {
             Some(s) => s,
             None => Sign::of_i128(cross(self.angle.vector(), v)),
         }
@@ -167,7 +189,7 @@ impl Dir {
     /// `Greater` after it (the walk's range is less than a half turn, so the side of the
     /// line decides). Without an exact direction only `Equal` is decided (`inside`
     /// otherwise: the walk itself orders events against an exact end).
-    fn place(&self, exacts: &[(Wide, Wide)], a: &Angle, inside: Ordering, ccw: bool) -> Ordering {
+    fn place(&self, ends: Ends<'_>, a: &Angle, inside: Ordering, ccw: bool) -> Ordering {
         if self.exact.is_none() {
             return if a.cmp_exact(&self.angle) == Ordering::Equal {
                 Ordering::Equal
@@ -175,7 +197,7 @@ impl Dir {
                 inside
             };
         }
-        let ccw_order = match self.turn(exacts, a.vector()) {
+        let ccw_order = match self.turn(ends, a.vector()) {
             Sign::Positive => Ordering::Greater,
             Sign::Zero => Ordering::Equal,
             Sign::Negative => Ordering::Less,
@@ -289,8 +311,8 @@ struct Tree<'a, 's, S: Storage> {
 /// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
 /// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
 /// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `400·N + 600·H + 520` bytes — `N` frames of 400 bytes, per hop 56 bytes and the
-/// 1024-bit exact directions of its mapped range ends (544 bytes, see [`Frames::Exacts`]),
+/// x86-64: `400·N + 152·H + 520` bytes — `N` frames of 400 bytes, per hop 56 bytes and the
+/// exact directions of its two mapped range ends (96 bytes, [`Mapped`]),
 /// and the branch, the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
 pub struct TreeScratch<const N: usize, const H: usize = N> {
@@ -440,10 +462,10 @@ trait Frames {
 /// The exact directions of the two ends of a range mapped through a hop, by the end's
 /// position in the range: `Dir::exact` indexes the stack flattened, `2·entry + end`. A
 /// slot no end points at (an end without one, or dropped by a collapse) is never read.
-type ExactPair = [(Wide, Wide); 2];
+type ExactPair = [Mapped; 2];
 
 /// A fresh entry of a stack of [`ExactPair`]s, and the directions below it, flattened.
-type Reserved<'e> = (&'e mut ExactPair, &'e [(Wide, Wide)]);
+type Reserved<'e> = (&'e mut ExactPair, &'e [Mapped]);
 
 /// A stack of [`ExactPair`]s.
 // Only mirrors and refraction push; with screens alone the stack stays empty.
@@ -452,20 +474,20 @@ type Reserved<'e> = (&'e mut ExactPair, &'e [(Wide, Wide)]);
     allow(dead_code)
 )]
 trait ExactStack {
-    /// Pushes a zero entry, or [`WalkError::TreeTooDeep`] when full: the entry to fill in
-    /// place (no 544-byte temporaries on the stack) and the directions below it, flattened.
+    /// Pushes an entry, or [`WalkError::TreeTooDeep`] when full: the entry to fill in
+    /// place and the directions below it, flattened.
     fn reserve(&mut self) -> Result<Reserved<'_>, WalkError>;
     fn truncate_to(&mut self, len: usize);
     fn entries(&self) -> &[ExactPair];
     /// All exact directions in order, as `Dir::exact` indexes them.
-    fn flat(&self) -> &[(Wide, Wide)] {
+    fn flat(&self) -> &[Mapped] {
         self.entries().as_flattened()
     }
 }
 
 /// A stack of [`ExactPair`]s over `V`, whose popped entries stay as slots for the next
-/// pushes: an entry is reserved without zeroing and copying its 544 bytes (the stale
-/// directions of a reused slot are never read: an end points at its slot only once written).
+/// pushes (the stale directions of a reused slot are never read: an end points at its slot
+/// only once written).
 struct ExactSlots<V> {
     slots: V,
     len: usize,
@@ -1374,7 +1396,13 @@ impl<S: Storage> Tree<'_, '_, S> {
                 Frame::Walk(w) => {
                     let level = w.level;
                     let (c, at) = (&mut cluster, (stage, level_len));
-                    fresh = if w.next_piece(self, sc.exacts.flat(), at, (piece, fresh), c)? {
+                    fresh = if w.next_piece(
+                        self,
+                        Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+                        at,
+                        (piece, fresh),
+                        c,
+                    )? {
                         // Its last piece: the walk leaves the stack now.
                         let left = w.done;
                         if left {
@@ -1390,7 +1418,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                 Frame::Split(s) => {
                     let (level, m, kind) = (s.level, s.cut.m, s.cut.kind);
                     let at = (stage, level_len);
-                    fresh = match s.next_edge(self, sc.exacts.flat(), at, (piece, fresh)) {
+                    fresh = match s.next_edge(
+                        self,
+                        Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+                        at,
+                        (piece, fresh),
+                    ) {
                         // Done with its last edge piece, the split leaves the stack now.
                         Some(e) if s.cut.done => {
                             sc.leave(level);
@@ -2710,7 +2743,7 @@ impl RangeWalk {
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
-        exacts: &[(Wide, Wide)],
+        ends: Ends<'_>,
         (stage, level): (u8, u8),
         (out, fresh): (&mut Piece, bool),
         c: &mut Cluster,
@@ -2722,7 +2755,7 @@ impl RangeWalk {
         let mut end = None;
         if let Some(events) = self.events.as_mut() {
             while events.cluster(tree.complex, tree.scene, c)? {
-                match self.to.place(exacts, &c.first.angle, Ordering::Less, ccw) {
+                match self.to.place(ends, &c.first.angle, Ordering::Less, ccw) {
                     // On the closing ray: not inside the open range.
                     Ordering::Equal => {
                         end = Some(Dir::of(&c.first));
@@ -2737,7 +2770,7 @@ impl RangeWalk {
                     Ordering::Greater
                 } else {
                     self.from
-                        .place(exacts, &c.first.angle, Ordering::Greater, ccw)
+                        .place(ends, &c.first.angle, Ordering::Greater, ccw)
                 };
                 self.past_from = opening == Ordering::Greater;
                 if opening != Ordering::Greater {
@@ -2803,10 +2836,11 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
     /// only places the range end; the angular error is about 2⁻⁵² rad), and in the latter
     /// case its exact direction, written to `out` (at the flattened index `at`) unless past
-    /// `Wide`'s budget. `exacts`: the stack of exact directions below `out`, flattened.
+    /// `Wide`'s budget. `below`: the stack of exact directions below `out`, flattened;
+    /// `chain`: the hops below `hop`.
     fn map_end(
         &self,
-        (exacts, out, at): (&[(Wide, Wide)], &mut (Wide, Wide), usize),
+        (below, out, at, chain): (&[Mapped], &mut Mapped, usize, HopChain<'_>),
         end: &mut Dir,
         hop: &Hop,
         mirror: bool,
@@ -2884,47 +2918,18 @@ impl<S: Storage> Tree<'_, '_, S> {
             return Ok(());
         }
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
-        // The same exactly, scaled by |den|: `(prev − next)·den + num·d`; from an end
-        // without an exact direction (`d` itself is exact) `den` is the one above. Any
-        // positive scale is the same direction: an axis-parallel edge (a hall's walls) is
-        // taken as its unit vector, which divides `den` and `num` by its length.
-        let (e1, num1) = if axis {
-            let e1 = (e.0.signum(), e.1.signum());
-            (e1, cross(diff(a, hop.prev), e1))
-        } else {
-            (e, num)
+        // The same exactly, as a recipe and an enclosure (`mapped`), kept on the stack of
+        // exact directions until the frame walking it is popped; none past `Wide`'s budget.
+        let t = Terms::of(hop, chain.points);
+        let here = u8::try_from(chain.hops.len()).map_err(|_| WalkError::TreeTooDeep)?;
+        let mapped = match end.exact.and_then(|i| below.get(usize::from(i))) {
+            Some(x) => x.through(chain, &t, here, mirror && axis),
+            None => Mapped::start(d64, &t, here),
         };
-        // Written to `out` in place (no 272-byte temporaries) and kept on the stack of exact
-        // directions until the frame walking it is popped; `false` past `Wide`'s budget.
-        let written = match end.exact(exacts) {
-            Some(x) if mirror && axis => reflect_axis(x, e1, num1, out),
-            Some(x) => {
-                // `cross(x, e1)`: along an axis one coordinate of `x`, up to sign.
-                let den = match e1 {
-                    (0, s) if axis => Some(if s > 0 { x.0 } else { x.0.neg() }),
-                    (s, _) if axis => Some(if s > 0 { x.1.neg() } else { x.1 }),
-                    _ => Wide::cross(x, e1),
-                };
-                den.is_some_and(|den| scaled_hit(x, &den, num1, pn, out))
-            }
-            // Along an axis all in `i128`: |den| < 2⁶³, |pn|, |num| < 2⁵⁴, sums < 2¹¹⁸.
-            None if axis => {
-                let den1 = cross(d, e1);
-                let s = den1.signum();
-                out.0 = Wide::from_i128(s * (den1 * pn.0 + num1 * d.0));
-                out.1 = Wide::from_i128(s * (den1 * pn.1 + num1 * d.1));
-                true
-            }
-            // Two products each of an `i128` and an `i64` (`pn` and `d` in `i64`),
-            // below 2¹⁹¹ (`scaled_hit` without its general loops), scaled by `|den|`: a
-            // negative `den` negates both `i128` factors (`|den|, |num| < 2¹¹⁰`).
-            None => {
-                let (den, num) = if den < 0 { (-den, -num) } else { (den, num) };
-                Wide::mul2_into(den, pn64.0, num, d64.0, &mut out.0);
-                Wide::mul2_into(den, pn64.1, num, d64.1, &mut out.1);
-                true
-            }
-        };
+        let written = mapped.is_some_and(|m| {
+            *out = m;
+            true
+        });
         let exact = if written {
             Some(u8::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
         } else {
@@ -2948,7 +2953,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// `exacts`, one entry for the two, kept until the frame walking the range is popped.
     fn map_range<E: ExactStack>(
         &self,
-        exacts: &mut E,
+        (exacts, hops): (&mut E, &[Hop]),
         p: &mut Piece,
         ccw: bool,
         hop: &Hop,
@@ -2965,8 +2970,12 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             (&mut p.to, &mut p.from)
         };
-        self.map_end((below, x0, at), lo, hop, flip)?;
-        self.map_end((below, x1, at + 1), hi, hop, flip)?;
+        let chain = HopChain {
+            hops,
+            points: self.scene.vertices(),
+        };
+        self.map_end((below, x0, at, chain), lo, hop, flip)?;
+        self.map_end((below, x1, at + 1, chain), hi, hop, flip)?;
         if lo.exact.is_none() && hi.exact.is_none() {
             exacts.truncate_to(entry);
         }
@@ -3012,7 +3021,12 @@ impl<S: Storage> Tree<'_, '_, S> {
         };
         let (stage, index) = sc.lengths()?;
         let ends = (&p.from, &p.to);
-        let Some(e) = cut.next(self, sc.exacts.flat(), (level.eye, level.ccw), ends) else {
+        let Some(e) = cut.next(
+            self,
+            Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+            (level.eye, level.ccw),
+            ends,
+        ) else {
             sc.restore(level);
             return Ok(false);
         };
@@ -3092,7 +3106,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             turned.marks(sc)?
         };
-        self.map_range(&mut sc.exacts, p, level.ccw, &hop, flip)?;
+        self.map_range((&mut sc.exacts, &sc.hops), p, level.ccw, &hop, flip)?;
         sc.hops.push(hop)?;
         match kind {
             #[cfg(feature = "refraction")]
@@ -3264,14 +3278,14 @@ impl Split {
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
-        exacts: &[(Wide, Wide)],
+        ends: Ends<'_>,
         (stage, level): (u8, u8),
         (out, fresh): (&mut Piece, bool),
     ) -> Option<(usize, usize)> {
         let (eye, ccw) = (self.level.eye, self.level.ccw);
         let e = self
             .cut
-            .next(tree, exacts, (eye, ccw), (&self.from, &self.to))?;
+            .next(tree, ends, (eye, ccw), (&self.from, &self.to))?;
         let range = (!fresh).then_some((&self.from, &self.to, &self.first));
         tree.write_edge_piece((eye, stage, level), &e, out, range);
         Some(e.edge)
@@ -3286,7 +3300,7 @@ impl Cut {
     fn next<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
-        exacts: &[(Wide, Wide)],
+        ends: Ends<'_>,
         (eye, ccw): (QueryPoint, bool),
         (from, to): (&Dir, &Dir),
     ) -> Option<EdgePiece> {
@@ -3321,12 +3335,12 @@ impl Cut {
         let piece = |((_, _), (s0, s1)): ((usize, usize), (usize, usize))| {
             let (v0, v1) = (diff(tree.qpoint(s0), eye), diff(tree.qpoint(s1), eye));
             // Against the range ends exactly (`Dir::turn`), counter-clockwise.
-            let sv = (lo.turn(exacts, v0) == Sign::Positive).then_some(v0);
-            let ev = (hi.turn(exacts, v1) == Sign::Negative).then_some(v1);
+            let sv = (lo.turn(ends, v0) == Sign::Positive).then_some(v0);
+            let ev = (hi.turn(ends, v1) == Sign::Negative).then_some(v1);
             let nonempty = match (sv, ev) {
                 (Some(a), Some(b)) => cross(a, b) > 0,
-                (None, Some(b)) => lo.turn(exacts, b) == Sign::Positive,
-                (Some(a), None) => hi.turn(exacts, a) == Sign::Negative,
+                (None, Some(b)) => lo.turn(ends, b) == Sign::Positive,
+                (Some(a), None) => hi.turn(ends, a) == Sign::Negative,
                 (None, None) => cross(lv, hv) > 0,
             };
             nonempty.then(|| {
@@ -3501,54 +3515,6 @@ fn reflected(d: (i128, i128), e: (i128, i128), num: i128, den: i128) -> Option<D
         _ => return None,
     };
     Direction::new(i64::try_from(r.0).ok()?, i64::try_from(r.1).ok()?)
-}
-
-/// The exact direction `x` of a range end from the previous eye mapped through an
-/// axis-parallel mirror edge of unit vector `e1` (as [`reflected`] maps an exact angle),
-/// written to `out`: `x` reflected, up to the sign of `t = num / cross(x, e1)` — no
-/// products, and no growth from hop to hop. `false` (and `out` untouched) where `t` is zero.
-#[cfg(any(feature = "mirrors", feature = "refraction"))]
-fn reflect_axis(x: &(Wide, Wide), e1: (i128, i128), num: i128, out: &mut (Wide, Wide)) -> bool {
-    // `cross(x, e1)`: along an axis one coordinate of `x`, up to sign.
-    let den = match e1 {
-        (0, s) => Sign::of_i128(s).times(x.0.sign()),
-        (s, _) => Sign::of_i128(-s).times(x.1.sign()),
-    };
-    let t = den.times(Sign::of_i128(num));
-    if t == Sign::Zero {
-        return false;
-    }
-    *out = *x;
-    // Negated: the coordinate across the edge, or the other one where `t < 0`.
-    if (e1.0 == 0) == (t == Sign::Positive) {
-        out.0 = out.0.neg();
-    } else {
-        out.1 = out.1.neg();
-    }
-    true
-}
-
-/// The hit point of [`Tree::map_end`] relative to the next eye, exactly, scaled by the
-/// denominator's magnitude: `(prev − next)·den + num·d` (the direction `d` from `prev`, `num`
-/// the numerator of the hit's parameter, `pn = prev − next`), written to `out`; `false` (and
-/// `out` untouched) for a zero denominator or past `Wide`'s budget.
-#[cfg(any(feature = "mirrors", feature = "refraction"))]
-fn scaled_hit(
-    d: &(Wide, Wide),
-    den: &Wide,
-    num: i128,
-    pn: (i128, i128),
-    out: &mut (Wide, Wide),
-) -> bool {
-    let (Some(x), Some(y)) = (den.mul_add(pn.0, &d.0, num), den.mul_add(pn.1, &d.1, num)) else {
-        return false;
-    };
-    match den.sign() {
-        Sign::Negative => *out = (x.neg(), y.neg()),
-        Sign::Zero => return false,
-        Sign::Positive => *out = (x, y),
-    }
-    true
 }
 
 fn side(a: QueryPoint, b: QueryPoint, p: QueryPoint) -> Sign {
@@ -3749,7 +3715,8 @@ mod tests {
     #[cfg(feature = "mirrors")]
     #[test]
     fn axis_mirror_hop_reflects_the_exact_direction() {
-        use super::{cross, diff, reflect_axis, reflected};
+        use super::mapped::reflect_axis;
+        use super::{cross, diff, reflected};
         use crate::geom::wide::Wide;
         use crate::geom::Sign;
         use crate::walk::optics;
@@ -4215,8 +4182,8 @@ mod tests {
     #[test]
     fn fresh_range_walk_pieces_are_the_written_ones() {
         use super::{
-            cross, ranked, Boundary, Cluster, Dir, ExactSlots, Frame, Frames, Level, Piece, Stacks,
-            Tree, Wide,
+            cross, ranked, Boundary, Cluster, Dir, Ends, ExactSlots, Frame, Frames, Level, Mapped,
+            Piece, Stacks, Tree,
         };
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
@@ -4236,7 +4203,8 @@ mod tests {
                 // order (by about 10⁻⁶ rad, as mapped through a hop): the walk then meets
                 // the event of `h` on the opening ray, which moves the start onto `h`.
                 let v = from.angle.vector();
-                let exacts = [(Wide::from_i128(v.0), Wide::from_i128(v.1))];
+                let exacts = [Mapped::exactly((v.0 as i64, v.1 as i64), 0)];
+                let mapped = Ends::new(&exacts, &[], &[]);
                 let (mut x, mut y) = v;
                 while x.abs().max(y.abs()) >= 1 << 30 {
                     (x, y) = (x >> 1, y >> 1);
@@ -4293,7 +4261,7 @@ mod tests {
                                 return None;
                             };
                             while w
-                                .next_piece(&tree, &exacts, (0, 0), (&mut out, fresh), &mut c)
+                                .next_piece(&tree, mapped, (0, 0), (&mut out, fresh), &mut c)
                                 .ok()?
                             {
                                 fresh = false;
@@ -4334,7 +4302,7 @@ mod tests {
     #[cfg(feature = "refraction")]
     #[test]
     fn split_pieces_do_not_depend_on_the_hint() {
-        use super::{cross, diff, ranked, Cut, Dir, SplitKind, Tree};
+        use super::{cross, diff, ranked, Cut, Dir, Ends, SplitKind, Tree};
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
         let (s, c) = anchored();
@@ -4396,7 +4364,9 @@ mod tests {
                             };
                             let mut out = Vec::new();
                             for _ in 0..o.len() + 2 {
-                                let Some(e) = cut.next(&tree, &[], (q, ccw), (from, to)) else {
+                                let Some(e) =
+                                    cut.next(&tree, Ends::new(&[], &[], &[]), (q, ccw), (from, to))
+                                else {
                                     break;
                                 };
                                 out.push((e.edge, e.start, e.end));
