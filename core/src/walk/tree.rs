@@ -2926,14 +2926,12 @@ impl<S: Storage> Tree<'_, '_, S> {
             Some(x) => x.through(chain, &t, here, mirror && axis),
             None => Mapped::start(d64, &t, here),
         };
-        let written = mapped.is_some_and(|m| {
-            *out = m;
-            true
-        });
-        let exact = if written {
-            Some(u8::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
-        } else {
-            None
+        let exact = match mapped {
+            Some(m) => {
+                *out = m;
+                Some(u8::try_from(at).map_err(|_| WalkError::TreeTooDeep)?)
+            }
+            None => None,
         };
         *end = Dir {
             exact,
