@@ -415,13 +415,17 @@ mod tests {
                     // Nearly along the direction: its midpoint scaled, plus a unit or two.
                     1 => {
                         let k = libm::ldexp(1.0, bits as i32 - 2);
-                        ((m.m.0 * k) as i64 + int(1), (m.m.1 * k) as i64 + int(1))
+                        (
+                            ((m.m.0 * k) as i64).saturating_add(int(1)),
+                            ((m.m.1 * k) as i64).saturating_add(int(1)),
+                        )
                     }
                     _ => (int(bits), int(bits)),
                 };
-                let Some(b) =
-                    Point::from_raw(raw(i64::from(a.x()) + e.0), raw(i64::from(a.y()) + e.1))
-                else {
+                let Some(b) = Point::from_raw(
+                    raw(i64::from(a.x()).saturating_add(e.0)),
+                    raw(i64::from(a.y()).saturating_add(e.1)),
+                ) else {
                     break;
                 };
                 if a == b {
