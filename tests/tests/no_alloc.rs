@@ -714,7 +714,7 @@ fn lock_step_ray_trees_allocate_nothing() {
 
 /// A scratch too small for the tree, in frames or in hops, is an error, never a panic or a
 /// cut tree; a tree through mirrors only needs a hop per level; and the scratch's size is
-/// within the documented `408·N + 160·H + 640` (`400·N + 152·H + 520` on x86-64).
+/// within the documented `328·N + 160·H + 640` (`320·N + 152·H + 520` on x86-64).
 #[test]
 fn tree_scratch_is_bounded() {
     let _g = lock();
@@ -752,7 +752,7 @@ fn tree_scratch_is_bounded() {
     ] {
         println!("TreeScratch<{n}, {h}>: {size} bytes");
         assert!(
-            size <= 408 * n + 160 * h + 640,
+            size <= 328 * n + 160 * h + 640,
             "TreeScratch<{n}, {h}> is {size} bytes"
         );
     }

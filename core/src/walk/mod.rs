@@ -454,8 +454,9 @@ impl<S: Storage> Complex<S> {
         end: Option<Position>,
         step: &mut impl FnMut(&Step),
     ) -> Result<(), WalkError> {
-        let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(q, anchor, cur, from, end, true);
-        while let Some(s) = walker.next_step_in::<S, true>(self, scene)? {
+        let trace = Trace::new(q, anchor, end);
+        let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(cur, from, true);
+        while let Some(s) = walker.next_step_in::<S, true>(self, scene, &trace)? {
             step(&s);
         }
         Ok(())
@@ -530,6 +531,28 @@ impl CachedTangents {
     }
 }
 
+/// What a [`Walker`] follows and never changes: the eye `q`, the layer it keeps and where
+/// it ends (see [`Walker`]). Apart from the walker's state and passed to every step: a ray
+/// tree's frame holds its eye and the end of its range anyway, so its walker does not keep
+/// them a second time (56 bytes less per frame, `TreeScratch`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Trace {
+    pub(crate) q: QueryPoint,
+    pub(crate) anchor: Anchor,
+    end: Option<(u8, KeyedAngle)>,
+}
+
+impl Trace {
+    #[inline]
+    pub(crate) fn new(q: QueryPoint, anchor: Anchor, end: Option<Position>) -> Trace {
+        Trace {
+            q,
+            anchor,
+            end: end.map(|e| (e.lap, e.angle.keyed())),
+        }
+    }
+}
+
 /// A resumable walk of the trace of `q`: [`Walker::next_step`] advances one event at a
 /// time, so several traces (the generations of a ray tree) can be walked in lock step.
 /// Allocates nothing.
@@ -566,8 +589,6 @@ impl CachedTangents {
 /// second.
 #[derive(Clone, Debug)]
 pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
-    q: QueryPoint,
-    anchor: Anchor,
     /// The cylinder the walk is in.
     cur: CylinderId,
     /// The angle of the last event (or the start); meaningless while `full`.
@@ -575,7 +596,6 @@ pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     /// Clockwise only: θ is 2π (the walk just crossed the permanent wall).
     full: bool,
     lap: u8,
-    end: Option<(u8, KeyedAngle)>,
     /// The tangent vertex of the last event, if it crossed a chain: never an exit of the
     /// cylinder entered, so its angle is not computed (see [`Walker::chain_exit_ccw`]).
     /// A `u32` (a scene has at most `MAX_VERTICES`; `None` otherwise, which only costs
@@ -620,23 +640,13 @@ impl<const K: usize> Walker<K> {
     /// (see the type's documentation for laps and `None`), with a tangent cache of `K`
     /// entries. Inlined: a call builds the walker apart and moves it (a `memcpy`).
     #[inline]
-    pub(crate) fn new(
-        q: QueryPoint,
-        anchor: Anchor,
-        cur: CylinderId,
-        from: Angle,
-        end: Option<Position>,
-        ccw: bool,
-    ) -> Walker<K> {
+    pub(crate) fn new(cur: CylinderId, from: Angle, ccw: bool) -> Walker<K> {
         const { assert!(K >= 2 && K.is_multiple_of(2), "sets of two entries") };
         Walker {
-            q,
-            anchor,
             cur,
             theta: from.keyed(),
             full: false,
             lap: 0,
-            end: end.map(|e| (e.lap, e.angle.keyed())),
             last: None,
             cache: [CachedTangents::EMPTY; K],
             steps: 0,
@@ -673,11 +683,12 @@ impl<const K: usize> Walker<K> {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
     ) -> Result<Option<Step>, WalkError> {
         if self.ccw {
-            self.next_step_in::<S, true>(complex, scene)
+            self.next_step_in::<S, true>(complex, scene, t)
         } else {
-            self.next_step_in::<S, false>(complex, scene)
+            self.next_step_in::<S, false>(complex, scene, t)
         }
     }
 
@@ -688,6 +699,7 @@ impl<const K: usize> Walker<K> {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
     ) -> Result<Option<Step>, WalkError> {
         // Bounded by the events taken: a walk that ended (or failed) stays so, as the
         // state does not change.
@@ -695,9 +707,9 @@ impl<const K: usize> Walker<K> {
             return Err(WalkError::Corrupt);
         }
         let r = if CCW {
-            self.next_ccw(complex, scene)
+            self.next_ccw(complex, scene, t)
         } else {
-            self.next_cw(complex, scene)
+            self.next_cw(complex, scene, t)
         };
         if let Ok(Some(_)) = r {
             self.steps += 1;
@@ -711,6 +723,7 @@ impl<const K: usize> Walker<K> {
     fn tangent_on(
         &mut self,
         scene: &SceneRef<'_>,
+        q: QueryPoint,
         object: ObjectId,
         bound: Bound,
     ) -> Option<usize> {
@@ -720,7 +733,7 @@ impl<const K: usize> Walker<K> {
         if let Some(e) = ways.iter().find(|e| e.object == object.0) {
             return e.on(bound);
         }
-        let (t, n) = crate::line_space::tangents_from(scene, object, self.q);
+        let (t, n) = crate::line_space::tangents_from(scene, object, q);
         match (
             CachedTangents::pack(object, t, n),
             self.cache.get_mut(set..set + 2),
@@ -755,6 +768,7 @@ impl<const K: usize> Walker<K> {
     fn candidate(
         &mut self,
         scene: &SceneRef<'_>,
+        q: QueryPoint,
         chain: Chain,
         arc: u32,
         ahead: bool,
@@ -762,7 +776,7 @@ impl<const K: usize> Walker<K> {
         if arc != NO_ARC_VERTEX {
             return Some(arc as usize);
         }
-        self.tangent_on(scene, chain.object, tangent_bound(chain, ahead))
+        self.tangent_on(scene, q, chain.object, tangent_bound(chain, ahead))
     }
 
     /// One counter-clockwise step: the first exit after θ.
@@ -771,41 +785,42 @@ impl<const K: usize> Walker<K> {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
     ) -> Result<Option<Step>, WalkError> {
         let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
         let lap = self.lap;
         let [bottom, top] = complex.borders_ref().arcs(self.cur);
-        let found = match self.exit_by_arcs(complex, scene, c, [bottom, top]) {
+        let found = match self.exit_by_arcs(complex, scene, t, c, [bottom, top]) {
             Some((angle, exit)) => Some((lap, angle, exit)),
             None => {
                 // The right wall, or a crossing of the bottom or top chain.
                 let mut best: Option<(u8, KeyedAngle, Option<ChainExit>)> = match c.right {
                     // The permanent wall ends a full-circle walk; a range walk crosses it.
-                    Wall::Zero => self
+                    Wall::Zero => t
                         .end
                         .map(|_| (lap.saturating_add(1), Angle::ZERO.keyed(), None)),
                     w => complex.wall_angle(scene, w).map(|a| (lap, a.keyed(), None)),
                 };
                 // Unrolled by hand: the loop over the two chains cost a view 2 % more.
-                self.chain_exit_ccw(scene, (c.bottom, bottom), Side::Below, &mut best);
-                self.chain_exit_ccw(scene, (c.top, top), Side::Above, &mut best);
+                self.chain_exit_ccw(scene, t, (c.bottom, bottom), Side::Below, &mut best);
+                self.chain_exit_ccw(scene, t, (c.top, top), Side::Above, &mut best);
                 best
             }
         };
         let Some((l, angle, exit)) = found else {
-            return match self.end {
+            return match t.end {
                 None => Ok(None), // θ reached 2π
                 Some(_) => Err(WalkError::Corrupt),
             };
         };
-        if let Some((e_lap, e_angle)) = &self.end {
+        if let Some((e_lap, e_angle)) = &t.end {
             if !ccw_before((l, &angle), (*e_lap, e_angle)) {
                 return Ok(None);
             }
         }
         let next = match exit {
             None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
-            Some(e) => self.cross(complex, scene, c, e, &angle)?,
+            Some(e) => self.cross(complex, scene, t.anchor, c, e, &angle)?,
         };
         self.theta = angle;
         self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
@@ -830,6 +845,7 @@ impl<const K: usize> Walker<K> {
         &self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
         c: &Cylinder,
         [bottom, top]: [u32; 2],
     ) -> Option<(KeyedAngle, Option<ChainExit>)> {
@@ -841,11 +857,12 @@ impl<const K: usize> Walker<K> {
         // Unrolled by hand, as in `next_ccw`.
         self.arc_exit(
             scene,
+            t,
             (c.bottom, bottom),
             Side::Below,
             (&mut best, &mut exit),
         )?;
-        self.arc_exit(scene, (c.top, top), Side::Above, (&mut best, &mut exit))?;
+        self.arc_exit(scene, t, (c.top, top), Side::Above, (&mut best, &mut exit))?;
         Some((best.keyed(), exit))
     }
 
@@ -856,6 +873,7 @@ impl<const K: usize> Walker<K> {
     fn arc_exit(
         &self,
         scene: &SceneRef<'_>,
+        t: &Trace,
         (chain, arc): (Option<Chain>, u32),
         side: Side,
         (best, exit): (&mut Angle, &mut Option<ChainExit>),
@@ -863,7 +881,7 @@ impl<const K: usize> Walker<K> {
         let Some(chain) = chain else {
             return Some(());
         };
-        if self.anchor == Anchor::Floor(chain.object) {
+        if t.anchor == Anchor::Floor(chain.object) {
             return Some(());
         }
         if arc == NO_ARC_VERTEX {
@@ -875,7 +893,7 @@ impl<const K: usize> Walker<K> {
             return Some(());
         }
         let ahead = exits_through(side, true);
-        let a = tangent_angle(scene, self.q, h, ahead);
+        let a = tangent_angle(scene, t.q, h, ahead);
         if before_within_half_turn(&a, best)? {
             *best = a;
             *exit = Some(ChainExit {
@@ -895,13 +913,14 @@ impl<const K: usize> Walker<K> {
     fn chain_exit_ccw(
         &mut self,
         scene: &SceneRef<'_>,
+        t: &Trace,
         (chain, arc): (Option<Chain>, u32),
         side: Side,
         best: &mut Option<(u8, KeyedAngle, Option<ChainExit>)>,
     ) {
         use core::cmp::Ordering;
         let Some(chain) = chain else { return };
-        if self.anchor == Anchor::Floor(chain.object) {
+        if t.anchor == Anchor::Floor(chain.object) {
             return;
         }
         let lap = self.lap;
@@ -910,7 +929,7 @@ impl<const K: usize> Walker<K> {
         // `exits_through`. The line q → h lies on the chain of h's tangent, its reverse on
         // the other: the candidate is the tangent on this chain (ahead) or the other one.
         let ahead = exits_through(side, true);
-        let Some(h) = self.candidate(scene, chain, arc, ahead) else {
+        let Some(h) = self.candidate(scene, t.q, chain, arc, ahead) else {
             return;
         };
         // The vertex just crossed: the line from the eye through it is the one at θ, or (an
@@ -918,7 +937,7 @@ impl<const K: usize> Walker<K> {
         if self.last.is_some_and(|l| l as usize == h) {
             return;
         }
-        let a = tangent_angle(scene, self.q, h, ahead).keyed();
+        let a = tangent_angle(scene, t.q, h, ahead).keyed();
         // Against the best exit first: most candidates lie past it, and of those before it
         // only the ones after θ count (fewer comparisons than the other way round).
         if best
@@ -942,25 +961,26 @@ impl<const K: usize> Walker<K> {
     fn chain_exit_cw(
         &mut self,
         scene: &SceneRef<'_>,
+        t: &Trace,
         (chain, arc): (Option<Chain>, u32),
         side: Side,
         best: &mut Option<(u8, Option<KeyedAngle>, Option<ChainExit>)>,
     ) {
         use core::cmp::Ordering;
         let Some(chain) = chain else { return };
-        if self.anchor == Anchor::Floor(chain.object) {
+        if t.anchor == Anchor::Floor(chain.object) {
             return;
         }
         let lap = self.lap;
         let bound = tangent_bound(chain, exits_through(side, false));
-        let Some(h) = self.candidate(scene, chain, arc, bound == chain.bound) else {
+        let Some(h) = self.candidate(scene, t.q, chain, arc, bound == chain.bound) else {
             return;
         };
         // The vertex just crossed, as counter-clockwise (θ − π for an arc vertex's reverse).
         if self.last.is_some_and(|l| l as usize == h) {
             return;
         }
-        let (a, ahead) = tangent_event(scene, self.q, h, bound, chain);
+        let (a, ahead) = tangent_event(scene, t.q, h, bound, chain);
         // Against the best exit first, as counter-clockwise.
         if best
             .as_ref()
@@ -983,35 +1003,36 @@ impl<const K: usize> Walker<K> {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
     ) -> Result<Option<Step>, WalkError> {
         let c = complex.cylinder(self.cur).ok_or(WalkError::Corrupt)?;
         let lap = self.lap;
         // The left wall, or a crossing of the bottom or top chain; `None` angle: θ = 2π
         // on the next lap, past the permanent wall.
         let mut best: Option<(u8, Option<KeyedAngle>, Option<ChainExit>)> = match c.left {
-            Wall::Zero => self.end.map(|_| (lap.saturating_add(1), None, None)),
+            Wall::Zero => t.end.map(|_| (lap.saturating_add(1), None, None)),
             w => complex
                 .wall_angle(scene, w)
                 .map(|a| (lap, Some(a.keyed()), None)),
         };
         // Unrolled by hand, as counter-clockwise.
         let [bottom, top] = complex.borders_ref().arcs(self.cur);
-        self.chain_exit_cw(scene, (c.bottom, bottom), Side::Below, &mut best);
-        self.chain_exit_cw(scene, (c.top, top), Side::Above, &mut best);
+        self.chain_exit_cw(scene, t, (c.bottom, bottom), Side::Below, &mut best);
+        self.chain_exit_cw(scene, t, (c.top, top), Side::Above, &mut best);
         let Some((l, angle, exit)) = best else {
-            return match self.end {
+            return match t.end {
                 None => Ok(None), // θ reached 0
                 Some(_) => Err(WalkError::Corrupt),
             };
         };
-        if let Some((e_lap, e_angle)) = &self.end {
+        if let Some((e_lap, e_angle)) = &t.end {
             if !cw_before((l, angle.as_ref()), (*e_lap, Some(e_angle))) {
                 return Ok(None);
             }
         }
         let next = match (exit, &angle) {
             (None, _) => c.left_neighbour.ok_or(WalkError::Corrupt)?,
-            (Some(e), Some(a)) => self.cross(complex, scene, c, e, a)?,
+            (Some(e), Some(a)) => self.cross(complex, scene, t.anchor, c, e, a)?,
             // A chain crossing always has an angle.
             (Some(_), None) => return Err(WalkError::Corrupt),
         };
@@ -1031,6 +1052,7 @@ impl<const K: usize> Walker<K> {
         &self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        anchor: Anchor,
         c: &Cylinder,
         exit: ChainExit,
         angle: &KeyedAngle,
@@ -1046,7 +1068,7 @@ impl<const K: usize> Walker<K> {
         };
         let layer = if side != crossed {
             Layer::Around
-        } else if ahead || matches!(self.anchor, Anchor::Floor(_)) {
+        } else if ahead || matches!(anchor, Anchor::Floor(_)) {
             // Point: h ahead of q, so the segment through q ends at the object.
             // Floor(m): the object appears between m and the old ceiling.
             Layer::Before
@@ -1058,7 +1080,7 @@ impl<const K: usize> Walker<K> {
         let next = complex
             .across_from_cylinder(scene, self.cur, c, side, layer, angle)
             .ok_or(WalkError::Corrupt)?;
-        if let Anchor::Floor(m) = self.anchor {
+        if let Anchor::Floor(m) = anchor {
             if complex.cylinder(next).and_then(|n| n.floor) != Some(m) {
                 return Err(WalkError::Corrupt);
             }
@@ -1247,8 +1269,37 @@ mod tests {
         out
     }
 
+    /// A walker with its trace, as the tests drive it.
+    #[derive(Clone)]
+    struct Traced<const K: usize = TANGENT_CACHE>(Walker<K>, Trace);
+
+    impl<const K: usize> Traced<K> {
+        fn new(
+            q: QueryPoint,
+            anchor: Anchor,
+            cur: CylinderId,
+            from: Angle,
+            end: Option<Position>,
+            ccw: bool,
+        ) -> Self {
+            Traced(Walker::new(cur, from, ccw), Trace::new(q, anchor, end))
+        }
+
+        fn next_step<S: Storage>(
+            &mut self,
+            c: &Complex<S>,
+            s: &SceneRef<'_>,
+        ) -> Result<Option<Step>, WalkError> {
+            self.0.next_step(c, s, &self.1)
+        }
+
+        fn cylinder(&self) -> CylinderId {
+            self.0.cylinder()
+        }
+    }
+
     /// The steps of a walker until it ends.
-    fn run(c: &Complex, s: &SceneRef<'_>, w: &mut Walker) -> Vec<Step> {
+    fn run(c: &Complex, s: &SceneRef<'_>, w: &mut Traced) -> Vec<Step> {
         let mut out = Vec::new();
         while let Some(st) = w.next_step(c, s).unwrap() {
             out.push(st);
@@ -1310,7 +1361,7 @@ mod tests {
                 lap: 1,
                 angle: Angle::ZERO,
             };
-            let mut w = Walker::new(q, Anchor::Point, cyl[0], Angle::ZERO, Some(full), false);
+            let mut w = Traced::new(q, Anchor::Point, cyl[0], Angle::ZERO, Some(full), false);
             let cw = run(&c, &s, &mut w);
             assert!(!cw.is_empty(), "from {q:?}");
             assert_eq!(cw[0].vertex, None, "from {q:?}");
@@ -1320,7 +1371,7 @@ mod tests {
             assert_eq!(w.cylinder(), cyl[0]);
 
             // The counter-clockwise walker is `walk_trace`.
-            let mut w = Walker::new(q, Anchor::Point, cyl[0], Angle::ZERO, None, true);
+            let mut w = Traced::new(q, Anchor::Point, cyl[0], Angle::ZERO, None, true);
             let again = run(&c, &s, &mut w);
             assert_eq!(again.len(), n);
             for (a, b) in again.iter().zip(&ccw[1..]) {
@@ -1339,12 +1390,12 @@ mod tests {
                 let i = rng.below(j as u32 + 1) as usize;
                 let (hi, lo) = (ccw[j + 1].angle, ccw[i].angle);
                 let end = Position { lap: 0, angle: lo };
-                let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
+                let mut w = Traced::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
                 let cw = run(&c, &s, &mut w);
                 assert_reversed(&cw, &ccw[i + 1..=j], &cyl[i..j]);
                 assert_eq!(w.cylinder(), cyl[i]);
                 if i == 0 {
-                    let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, None, false);
+                    let mut w = Traced::new(q, Anchor::Point, cyl[j], hi, None, false);
                     assert_eq!(run(&c, &s, &mut w).len(), j);
                 }
                 // The same range counter-clockwise (`walk_from`, as ray trees use it).
@@ -1368,7 +1419,7 @@ mod tests {
                         lap: 1,
                         angle: ccw[k].angle,
                     };
-                    let mut w = Walker::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
+                    let mut w = Traced::new(q, Anchor::Point, cyl[j], hi, Some(end), false);
                     let cw = run(&c, &s, &mut w);
                     assert_eq!(cw.len(), j + 1 + (n - k), "from {q:?}");
                     assert_reversed(&cw[..j], &ccw[1..=j], &cyl[..j]);
@@ -1402,7 +1453,7 @@ mod tests {
                 let Some(hi) = hi else { continue };
                 let anchor = Anchor::Floor(m);
                 let end = Position { lap: 0, angle: hi };
-                let mut w = Walker::new(q, anchor, cyl[i], lo, Some(end), true);
+                let mut w = Traced::new(q, anchor, cyl[i], lo, Some(end), true);
                 let fwd = run(&c, &s, &mut w);
                 let mut entered: Vec<CylinderId> = alloc::vec![cyl[i]];
                 entered.extend(fwd.iter().map(|st| st.cylinder));
@@ -1411,7 +1462,7 @@ mod tests {
                     assert_eq!(f, Some(m), "from {q:?}: left the sheet of {m:?}");
                 }
                 let end = Position { lap: 0, angle: lo };
-                let mut w = Walker::new(q, anchor, w.cylinder(), hi, Some(end), false);
+                let mut w = Traced::new(q, anchor, w.cylinder(), hi, Some(end), false);
                 let back = run(&c, &s, &mut w);
                 assert_reversed(&back, &fwd, &entered[..fwd.len()]);
                 assert_eq!(w.cylinder(), cyl[i]);
@@ -1461,7 +1512,7 @@ mod tests {
                     angle: Angle::ZERO,
                 };
                 for (end, ccw) in [(None, true), (Some(full), false)] {
-                    let mut a = Walker::<8>::new(q, Anchor::Point, start, Angle::ZERO, end, ccw);
+                    let mut a = Traced::<8>::new(q, Anchor::Point, start, Angle::ZERO, end, ccw);
                     let mut b = a.clone();
                     loop {
                         let (x, y) = (a.next_step(&with, &s), b.next_step(&without, &s));
@@ -1565,7 +1616,7 @@ mod tests {
             angle: Angle::ZERO,
         };
         for ccw in [true, false] {
-            let mut w: Walker = Walker::new(
+            let mut w: Traced = Traced::new(
                 q,
                 Anchor::Point,
                 start.unwrap(),

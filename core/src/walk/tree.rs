@@ -35,7 +35,7 @@
 use alloc::vec::Vec;
 use core::cmp::Ordering;
 
-use super::{Anchor, Position, Step, WalkError, Walker};
+use super::{Anchor, Position, Step, Trace, WalkError, Walker};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::wide::{i128_to_f64 as to_f64, mod_p, residue_i128, Wide, P};
@@ -145,6 +145,7 @@ impl Dir {
     }
 
     /// The vertex this end points at.
+    #[cfg_attr(not(any(feature = "mirrors", feature = "refraction")), allow(dead_code))]
     fn points_at(&self) -> Option<u32> {
         self.pointed.then_some(self.index)
     }
@@ -235,8 +236,11 @@ struct Boundary {
     angle: Angle,
     /// Branch index of the object hit by that stage.
     level: u8,
-    /// The vertex that caused the boundary, if no vertex is found by the rule.
-    fallback: Option<u32>,
+    /// The vertex that caused the boundary, if no vertex is found by the rule: `fallback`
+    /// where `falls_back` (two fields, as in [`Dir`]: an `Option<u32>` would pad the
+    /// boundary from 48 to 56 bytes, and a frame holds one).
+    fallback: u32,
+    falls_back: bool,
 }
 
 impl Boundary {
@@ -248,6 +252,11 @@ impl Boundary {
     /// The direction from the stage's eye.
     fn dir(&self) -> (i128, i128) {
         self.angle.vector()
+    }
+
+    /// The vertex that caused the boundary, if any.
+    fn fallback(&self) -> Option<u32> {
+        self.falls_back.then_some(self.fallback)
     }
 }
 
@@ -277,7 +286,8 @@ impl Piece {
                 eye: QueryPoint::default(),
                 angle: Angle::ZERO,
                 level: 0,
-                fallback: None,
+                fallback: 0,
+                falls_back: false,
             },
         }
     }
@@ -311,7 +321,7 @@ struct Tree<'a, 's, S: Storage> {
 /// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
 /// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
 /// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `400·N + 152·H + 520` bytes — `N` frames of 400 bytes, per hop 56 bytes and the
+/// x86-64: `320·N + 152·H + 520` bytes — `N` frames of 320 bytes, per hop 56 bytes and the
 /// exact directions of its two mapped range ends (96 bytes, [`Mapped`]),
 /// and the branch, the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
@@ -723,6 +733,20 @@ struct PrimaryWalk {
     done: bool,
 }
 
+impl PrimaryWalk {
+    /// What the walker follows: the eye, round past θ = 0 once more to reach `t`.
+    fn trace(&self) -> Trace {
+        Trace::new(
+            self.level.eye,
+            Anchor::Point,
+            Some(Position {
+                lap: 2,
+                angle: Angle::ZERO,
+            }),
+        )
+    }
+}
+
 /// A walk anchored to the floor `m` over the open range `(from, to)` in the frame's
 /// direction.
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
@@ -730,6 +754,9 @@ struct RangeWalk {
     level: Level,
     /// `None` for a range collapsed onto one direction (one piece, no walk).
     events: Option<Events>,
+    /// The floor the walk keeps, and the lap of its end `to` (the walker's [`Trace`]).
+    m: ObjectId,
+    end_lap: u8,
     from: Dir,
     to: Dir,
     seen: Option<ObjectId>,
@@ -883,9 +910,10 @@ impl Events {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
     ) -> Option<(Step, u8)> {
         while !self.over {
-            let s = match self.walker.next_step(complex, scene) {
+            let s = match self.walker.next_step(complex, scene, t) {
                 Ok(Some(s)) => s,
                 r => {
                     self.over = true;
@@ -911,6 +939,7 @@ impl Events {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
         out: &mut Cluster,
     ) -> Result<bool, WalkError> {
         // Over (every walk's last call; no step is peeked then, only while the walker goes
@@ -923,7 +952,7 @@ impl Events {
                 Ok(false)
             };
         }
-        self.next_cluster(complex, scene, out)
+        self.next_cluster(complex, scene, t, out)
     }
 
     /// [`Events::cluster`] while the walk goes on.
@@ -931,6 +960,7 @@ impl Events {
         &mut self,
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
+        t: &Trace,
         out: &mut Cluster,
     ) -> Result<bool, WalkError> {
         // The step ending the last cluster is this one's first: taken here, not through
@@ -949,7 +979,7 @@ impl Events {
         };
         // One call of `step`, inlined: the walker once, without a call per step (−1.2 %
         // instructions in the hall frame).
-        while let Some((s, l)) = self.step(complex, scene) {
+        while let Some((s, l)) = self.step(complex, scene, t) {
             if !open {
                 *out = Cluster {
                     first: s,
@@ -1254,17 +1284,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         close_on_event: bool,
     ) -> PrimaryWalk {
         // The walk may go round past θ = 0 once more to reach `t`.
-        let walker = Walker::new(
-            q,
-            Anchor::Point,
-            start,
-            theta,
-            Some(Position {
-                lap: 2,
-                angle: Angle::ZERO,
-            }),
-            true,
-        );
+        let walker = Walker::new(start, theta, true);
         // Deeper than `MAX_TREE_DEPTH` overflows the branch anyway (`TreeTooDeep`).
         let depth = u8::try_from(depth.min(MAX_TREE_DEPTH + 1)).unwrap_or(u8::MAX);
         PrimaryWalk {
@@ -1288,7 +1308,8 @@ impl<S: Storage> Tree<'_, '_, S> {
                 eye: q,
                 angle: f,
                 level: 0,
-                fallback: None,
+                fallback: 0,
+                falls_back: false,
             },
             close_on_event,
             closed_on_boundary: false,
@@ -1304,7 +1325,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut walk = self.primary_walk(q, (start, zero), 0, zero, zero, false);
         let mut seen = self.complex.ceiling(start);
         let c = &mut Cluster::empty();
-        while walk.events.cluster(self.complex, self.scene, c)? {
+        let trace = walk.trace();
+        while walk.events.cluster(self.complex, self.scene, &trace, c)? {
             // Round once (lap 1 holds the events at θ = 0 that end the first lap).
             if c.lap > 1 || (c.lap == 1 && c.first.angle.cmp_exact(&zero) != Ordering::Equal) {
                 break;
@@ -1514,7 +1536,8 @@ impl<S: Storage> Tree<'_, '_, S> {
             eye,
             angle: d.angle,
             level,
-            fallback: d.points_at(),
+            fallback: d.index,
+            falls_back: d.pointed,
         }
     }
 }
@@ -1532,9 +1555,10 @@ impl PrimaryWalk {
             return Ok(false);
         }
         let (q, f) = (self.level.eye, self.f);
+        let trace = self.trace();
         loop {
             // The walk ends past `t` (on lap 2): `t` closes the last piece.
-            if !self.events.cluster(tree.complex, tree.scene, c)? {
+            if !self.events.cluster(tree.complex, tree.scene, &trace, c)? {
                 self.done = true;
                 out.from = self.cur_from.clone();
                 out.to = Dir::at(self.t);
@@ -1791,7 +1815,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 });
                 return best
                     .or_else(|| self.resolve_beyond(all, rule, left, right))
-                    .or(rule.fallback.map(|v| v as usize));
+                    .or(rule.fallback().map(|v| v as usize));
             }
             // Different residues of `cross(d, w)`'s two products prove it nonzero.
             if let Some(&Some((r0, r1))) = residues.get(st) {
@@ -1823,7 +1847,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 return best;
             }
         }
-        rule.fallback.map(|v| v as usize)
+        rule.fallback().map(|v| v as usize)
     }
 
     /// The boundary direction of `rule` at every stage before the last, mapped back hop by
@@ -2698,29 +2722,22 @@ impl<S: Storage> Tree<'_, '_, S> {
             (start, Some((theta, lap)))
         };
         let walker = |(theta, lap): (Option<Angle>, u8)| {
-            let walker = Walker::new(
-                eye,
-                Anchor::Floor(m),
-                start,
-                theta.unwrap_or(Angle::ZERO),
-                Some(Position {
-                    lap,
-                    angle: to.angle,
-                }),
-                level.ccw,
-            );
+            let walker = Walker::new(start, theta.unwrap_or(Angle::ZERO), level.ccw);
             let walker = if theta.is_none() {
                 walker.at_top()
             } else {
                 walker
             };
-            Events::new(walker, false)
+            (Events::new(walker, false), lap)
         };
+        let (events, end_lap) = walk.map(walker).unzip();
         sc.push(
             level,
             Frame::Walk(RangeWalk {
                 level,
-                events: walk.map(walker),
+                events,
+                m,
+                end_lap: end_lap.unwrap_or(0),
                 seen: self.complex.ceiling(start),
                 cur_from: from.clone(),
                 from: from.clone(),
@@ -2753,8 +2770,16 @@ impl RangeWalk {
         }
         let (eye, ccw) = (self.level.eye, self.level.ccw);
         let mut end = None;
+        let trace = Trace::new(
+            eye,
+            Anchor::Floor(self.m),
+            Some(Position {
+                lap: self.end_lap,
+                angle: self.to.angle,
+            }),
+        );
         if let Some(events) = self.events.as_mut() {
-            while events.cluster(tree.complex, tree.scene, c)? {
+            while events.cluster(tree.complex, tree.scene, &trace, c)? {
                 match self.to.place(ends, &c.first.angle, Ordering::Less, ccw) {
                     // On the closing ray: not inside the open range.
                     Ordering::Equal => {
@@ -3877,7 +3902,7 @@ mod tests {
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     #[test]
     fn primary_start_is_where_the_walk_from_zero_is() {
-        use super::{Anchor, Tree, Walker};
+        use super::{Anchor, Trace, Tree, Walker};
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
         use core::cmp::Ordering;
@@ -3932,9 +3957,10 @@ mod tests {
                 fallbacks += 1;
                 continue;
             }
-            let mut walker: Walker = Walker::new(q, Anchor::Point, start, Angle::ZERO, None, true);
+            let trace = Trace::new(q, Anchor::Point, None);
+            let mut walker: Walker = Walker::new(start, Angle::ZERO, true);
             let mut at = start;
-            while let Some(step) = walker.next_step(&c, &s).unwrap() {
+            while let Some(step) = walker.next_step(&c, &s, &trace).unwrap() {
                 if step.angle.cmp_exact(&f) == Ordering::Greater {
                     break;
                 }
@@ -4228,7 +4254,8 @@ mod tests {
                         eye: q,
                         angle: from.angle,
                         level: 0,
-                        fallback: Some(h as u32),
+                        fallback: h as u32,
+                        falls_back: true,
                     };
                     let level = Level {
                         eye: q,
@@ -4478,7 +4505,7 @@ mod tests {
     /// the walker once it is over.
     #[test]
     fn clusters_stay_ended_and_failed() {
-        use super::{Anchor, Angle, Cluster, Events, Position, Walker};
+        use super::{Anchor, Angle, Cluster, Events, Position, Trace, Walker};
         let s = scene(Material::Opaque);
         let s = s.as_ref();
         let c = build_by_sweep(&s).unwrap();
@@ -4489,11 +4516,11 @@ mod tests {
                 lap,
                 angle: Angle::ZERO,
             };
-            let walker = Walker::new(eye(), Anchor::Point, start, Angle::ZERO, Some(end), true);
-            let mut events = Events::new(walker, false);
+            let trace = Trace::new(eye(), Anchor::Point, Some(end));
+            let mut events = Events::new(Walker::new(start, Angle::ZERO, true), false);
             let mut clusters = 0;
             let ended = loop {
-                match events.cluster(&c, &s, out) {
+                match events.cluster(&c, &s, &trace, out) {
                     Ok(true) => clusters += 1,
                     r => break r,
                 }
@@ -4501,7 +4528,7 @@ mod tests {
             assert!(clusters > 4, "{clusters}");
             for _ in 0..3 {
                 assert_eq!(ended, last);
-                assert_eq!(events.cluster(&c, &s, out), last);
+                assert_eq!(events.cluster(&c, &s, &trace, out), last);
             }
         }
     }

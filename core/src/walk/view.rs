@@ -5,7 +5,7 @@ use alloc::vec::Vec;
 use core::cmp::Ordering;
 
 use super::tree::wraps;
-use super::{Anchor, Position, WalkError, Walker, VIEW_TANGENT_CACHE};
+use super::{Anchor, Position, Trace, WalkError, Walker, VIEW_TANGENT_CACHE};
 use crate::geom::predicates::Direction;
 use crate::geom::sos::Angle;
 use crate::geom::QueryPoint;
@@ -137,12 +137,12 @@ fn back_to<S: Storage>(
         lap: 1,
         angle: Angle::ZERO,
     };
-    let mut walker =
-        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, start, Angle::ZERO, Some(end), false);
+    let trace = Trace::new(q, Anchor::Point, Some(end));
+    let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(start, Angle::ZERO, false);
     let mut cur = start;
     loop {
         let lap = walker.lap();
-        let Some(s) = walker.next_step_in::<S, false>(complex, scene)? else {
+        let Some(s) = walker.next_step_in::<S, false>(complex, scene, &trace)? else {
             break;
         };
         // The step onto the next lap crosses the permanent wall into θ = 2π.
@@ -303,8 +303,8 @@ fn sweep<S: Storage>(
     // inlined, and most steps (secondary walls, tangents behind `q`) need only the filter.
     let start = complex.trace_start(scene, q)?;
     let start_object = complex.ceiling(start);
-    let mut walker =
-        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, start, Angle::ZERO, None, true);
+    let trace = Trace::new(q, Anchor::Point, None);
+    let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(start, Angle::ZERO, true);
     // The leading run at θ = 0 (P), the current cluster of the middle, the trailing run (Z).
     let mut lead: Option<Cluster> = None;
     let mut middle: Option<Cluster> = None;
@@ -312,7 +312,7 @@ fn sweep<S: Storage>(
     let mut in_lead = true;
     // The object seen before the current middle cluster.
     let mut seen: Option<ObjectId> = start_object;
-    while let Some(s) = walker.next_step_in::<S, true>(complex, scene)? {
+    while let Some(s) = walker.next_step_in::<S, true>(complex, scene, &trace)? {
         // Only a tangent vertex ahead of `q` can change the view.
         let (Some(v), true) = (s.vertex, s.ahead) else {
             continue;
@@ -421,13 +421,13 @@ fn sweep_range<S: Storage>(
         lap: 2,
         angle: Angle::ZERO,
     };
-    let mut walker =
-        Walker::<VIEW_TANGENT_CACHE>::new(q, Anchor::Point, cylinder, theta, Some(end), true);
+    let trace = Trace::new(q, Anchor::Point, Some(end));
+    let mut walker = Walker::<VIEW_TANGENT_CACHE>::new(cylinder, theta, true);
     let mut seen = complex.ceiling(cylinder);
     // The interval at `f` is still to be written.
     let mut first = true;
     let mut current: Option<(u8, Cluster)> = None;
-    while let Some(s) = walker.next_step_in::<S, true>(complex, scene)? {
+    while let Some(s) = walker.next_step_in::<S, true>(complex, scene, &trace)? {
         let (Some(v), true) = (s.vertex, s.ahead) else {
             continue;
         };
