@@ -145,7 +145,10 @@ impl Dir {
     }
 
     /// The vertex this end points at.
-    #[cfg_attr(not(any(feature = "mirrors", feature = "refraction")), allow(dead_code))]
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction")),
+        allow(dead_code)
+    )]
     fn points_at(&self) -> Option<u32> {
         self.pointed.then_some(self.index)
     }

@@ -19,7 +19,9 @@
 //! Per method and `s`: the time per frame — the best of `--repeat` runs of each frame (which
 //! filters out the noise of a shared machine; a caster's frame is timed in chunks of about
 //! 1000 rays, best of `--repeat` each, summed, so that long frames are not penalized by
-//! preemption), median over the frames —, the mean absolute coverage error per column
+//! preemption; the complex's frame, some 10 µs, in batches of as many calls as last about
+//! as long as such a chunk, [`CHUNK_SECONDS`], so that one late call or a coarse clock
+//! does not weigh on it more), median over the frames —, the mean absolute coverage error per column
 //! (half the L1 distance between the estimated and the exact coverage of a column: the
 //! share of the column given to a wrong branch, averaged over columns and frames) and the
 //! share of columns whose dominant branch is wrong. Then per caster the
@@ -138,6 +140,30 @@ fn internal(e: impl core::fmt::Display) -> Failure {
     }
 }
 
+/// About the time of a caster's chunk of 1000 rays: the complex's frames are timed in
+/// batches this long.
+const CHUNK_SECONDS: f64 = 100e-6;
+
+/// Times `f` as a caster's chunk is timed: `repeat` batches of as many calls as last about
+/// [`CHUNK_SECONDS`] (at most 1000; sized by a first call, not timed), the best batch per
+/// call pushed (seconds); returns the first call's result.
+fn timed_batched<T>(times: &mut Vec<f64>, repeat: u32, mut f: impl FnMut() -> T) -> T {
+    let t = Instant::now();
+    let out = core::hint::black_box(f());
+    let once = t.elapsed().as_secs_f64();
+    let batch = (CHUNK_SECONDS / once.max(1e-9)).ceil().clamp(1.0, 1000.0) as u32;
+    let mut best = f64::INFINITY;
+    for _ in 0..repeat.max(1) {
+        let t = Instant::now();
+        for _ in 0..batch {
+            core::hint::black_box(f());
+        }
+        best = best.min(t.elapsed().as_secs_f64() / f64::from(batch));
+    }
+    times.push(best);
+    out
+}
+
 /// Runs `f` `repeat` times; pushes the best time (seconds) and returns the last result.
 fn timed<T>(times: &mut Vec<f64>, repeat: u32, mut f: impl FnMut() -> T) -> T {
     let mut best = f64::INFINITY;
@@ -250,7 +276,7 @@ fn curve<C: Caster>(
             for (cam, truth) in cameras.iter().zip(exact) {
                 // Timed in chunks of about 1000 rays, each the best of `repeat` runs, so
                 // that preemption on a loaded machine does not weigh on long frames more
-                // than on short ones (the complex's frame is one call of about 1 ms).
+                // than on short ones (the complex's frames in batches as long).
                 let chunk = (1024 / s).max(1);
                 let mut total = 0.0;
                 for c0 in (0..cam.width()).step_by(chunk) {
@@ -420,7 +446,7 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
     let (mut scratch, mut kept) = (Box::new(TreeScratch::<64>::new()), Vec::new());
     let mut table = CoverageTable::new();
     for cam in &cameras {
-        let r = timed(&mut times, a.repeat, || {
+        let r = timed_batched(&mut times, a.repeat, || {
             walk_frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)?;
             table.exact_into(cam, &kept);
             Ok::<_, WalkError>(kept.len())
@@ -430,11 +456,11 @@ pub(crate) fn measure(scene: &SceneRef<'_>, a: &Params) -> Result<Measured, Fail
             exact.push(table.clone());
             // The two stages apart: the walk (the ray tree over the field of view), then
             // the frame's coverage.
-            timed(&mut tree_times, a.repeat, || {
+            timed_batched(&mut tree_times, a.repeat, || {
                 walk_frame(&complex, &scene, cam, a.depth, &mut scratch, &mut kept)
             })
             .map_err(internal)?;
-            timed(&mut cover_times, a.repeat, || table.exact_into(cam, &kept));
+            timed_batched(&mut cover_times, a.repeat, || table.exact_into(cam, &kept));
             intervals += n;
             used.push(*cam);
         }
