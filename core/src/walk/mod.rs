@@ -534,7 +534,7 @@ impl CachedTangents {
 /// What a [`Walker`] follows and never changes: the eye `q`, the layer it keeps and where
 /// it ends (see [`Walker`]). Apart from the walker's state and passed to every step: a ray
 /// tree's frame holds its eye and the end of its range anyway, so its walker does not keep
-/// them a second time (56 bytes less per frame, `TreeScratch`).
+/// them a second time (64 bytes less per frame, `TreeScratch`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Trace {
     pub(crate) q: QueryPoint,

@@ -152,15 +152,14 @@ fn timed_batched<T>(times: &mut Vec<f64>, repeat: u32, mut f: impl FnMut() -> T)
     let out = core::hint::black_box(f());
     let once = t.elapsed().as_secs_f64();
     let batch = (CHUNK_SECONDS / once.max(1e-9)).ceil().clamp(1.0, 1000.0) as u32;
-    let mut best = f64::INFINITY;
-    for _ in 0..repeat.max(1) {
-        let t = Instant::now();
+    timed(times, repeat, || {
         for _ in 0..batch {
             core::hint::black_box(f());
         }
-        best = best.min(t.elapsed().as_secs_f64() / f64::from(batch));
+    });
+    if let Some(t) = times.last_mut() {
+        *t /= f64::from(batch);
     }
-    times.push(best);
     out
 }
 
