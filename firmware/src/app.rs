@@ -244,20 +244,21 @@ pub fn views(
 /// [`FRAME_CAPACITY`]).
 pub const TREE_DEPTH: usize = 4;
 
-/// Frames of the tree walk's stack: the primary walk, then two per level for a mirror (its
-/// split and the reflected walk). The hall has mirrors and opaque objects only — no
-/// refraction (three per level), no screens (one each) — so `1 + 2·depth` suffices where
-/// `TreeScratch`'s general rule is `3·depth + 4`; a file that needs more is a
-/// `WalkError::TreeTooDeep`, and the host test checks that one frame fewer is too few.
-pub const TREE_FRAMES: usize = 2 * TREE_DEPTH + 1;
+/// Walks of the tree walk's stack: the primary walk, then one per level (the reflected
+/// walk behind a mirror). The hall has mirrors and opaque objects only — no screens (a
+/// walk each) — so `depth + 1` suffices; a file that needs more is a
+/// `WalkError::TreeTooDeep`, and the host test checks that one fewer is too few.
+pub const TREE_WALKS: usize = TREE_DEPTH + 1;
 
-/// Changes of eye the tree walk holds at once: one per level for a mirror
-/// (`TreeScratch`'s default, one per frame, would also cover refraction's two per level);
-/// the host test checks that one fewer is too few.
-pub const TREE_HOPS: usize = TREE_DEPTH;
+/// Splits of the tree walk's stack: one per level for a mirror (refraction would need two,
+/// an entry and an exit split); the host test checks that one fewer is too few.
+pub const TREE_SPLITS: usize = TREE_DEPTH;
+
+/// Changes of eye the tree walk holds at once: one per split (`TreeScratch`'s default).
+pub const TREE_HOPS: usize = TREE_SPLITS;
 
 /// The ray tree's working memory.
-pub type TreeRam = TreeScratch<TREE_FRAMES, TREE_HOPS>;
+pub type TreeRam = TreeScratch<TREE_WALKS, TREE_SPLITS, TREE_HOPS>;
 
 /// Columns of a frame.
 pub const COLUMNS: usize = 64;

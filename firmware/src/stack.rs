@@ -86,7 +86,7 @@ pub fn report(
         Uart,
         "vcx-firmware: size_of Angle {} B, ViewInterval {} B, Cylinder {} B, Vertex {} B, \
          Slots {} B, Arenas {} B, Ram {} B, Out {} B, FrameInterval {} B, \
-         TreeRam ({} frames, {} hops) {} B, Frame ({} intervals) {} B",
+         TreeRam ({} walks, {} splits, {} hops) {} B, Frame ({} intervals) {} B",
         size_of::<vcx::geom::sos::Angle>(),
         size_of::<vcx::walk::ViewInterval>(),
         size_of::<vcx::partition::Cylinder>(),
@@ -96,7 +96,8 @@ pub fn report(
         size_of::<crate::app::Ram>(),
         size_of::<crate::app::Out>(),
         size_of::<vcx::render::FrameInterval>(),
-        crate::app::TREE_FRAMES,
+        crate::app::TREE_WALKS,
+        crate::app::TREE_SPLITS,
         crate::app::TREE_HOPS,
         size_of::<crate::app::TreeRam>(),
         crate::app::FRAME_CAPACITY,

@@ -1568,14 +1568,14 @@ pub fn check_tree_ranges(
     compare_tree_ranges(s, c, q, depth, full, ranges)
 }
 
-/// `walk::frame_tree_into` with 64 frames and `H` hops: each interval's start bits and branch.
+/// `walk::frame_tree_into` with 64 walks, 64 splits and `H` hops: each interval's start bits and branch.
 fn stream<const H: usize>(
     c: &Complex,
     s: &SceneRef<'_>,
     (q, depth, from, to): (QueryPoint, usize, Direction, Direction),
 ) -> Result<Vec<(u64, Vec<ObjectId>)>, vcx::walk::WalkError> {
     let mut streamed = Vec::new();
-    let mut scratch = Box::new(vcx::walk::TreeScratch::<64, H>::new());
+    let mut scratch = Box::new(vcx::walk::TreeScratch::<64, 64, H>::new());
     vcx::walk::frame_tree_into(c, s, q, depth, from, to, &mut scratch, |i| {
         streamed.push((i.start.to_bits(), i.branch.to_vec()))
     })?;

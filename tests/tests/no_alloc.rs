@@ -408,7 +408,8 @@ fn firmware_walk_matches_owned_view_and_reference() {
 /// complex built by the sweep (which `tests/tests/ray_trees.rs` checks against the exact
 /// reference) with the same camera: the same intervals (branch, start bits) in the same
 /// order, and the same coverage, which covers each column once. The frames reach the full
-/// depth, so the scratch's `1 + 2·depth` frames are needed: one fewer is `TreeTooDeep`.
+/// depth, so the scratch's `depth + 1` walks and `depth` splits and hops are needed: one
+/// fewer of any is `TreeTooDeep`.
 #[test]
 fn firmware_trees_match_owned_frame_tree() {
     use vcx::render::{angle_order, coverage, Camera, FrameInterval, Piece};
@@ -522,15 +523,31 @@ fn firmware_trees_match_owned_frame_tree() {
         "{any_heading} intervals"
     );
 
-    // One frame fewer than the firmware's scratch is too few for some viewpoint, and says
-    // so; so is one hop fewer.
-    let mut fewer_frames = Box::new(TreeScratch::<{ app::TREE_FRAMES - 1 }>::new());
+    // One walk fewer than the firmware's scratch is too few for some viewpoint, and says
+    // so; so are one split and one hop fewer.
+    let mut fewer_walks = Box::new(TreeScratch::<
+        { app::TREE_WALKS - 1 },
+        { app::TREE_SPLITS },
+        { app::TREE_HOPS },
+    >::new());
     assert!(
-        some_tree_too_deep(&complex, &s, &mut fewer_frames),
-        "TREE_FRAMES is more than the trees need"
+        some_tree_too_deep(&complex, &s, &mut fewer_walks),
+        "TREE_WALKS is more than the trees need"
     );
-    let mut fewer_hops =
-        Box::new(TreeScratch::<{ app::TREE_FRAMES }, { app::TREE_HOPS - 1 }>::new());
+    let mut fewer_splits = Box::new(TreeScratch::<
+        { app::TREE_WALKS },
+        { app::TREE_SPLITS - 1 },
+        { app::TREE_HOPS },
+    >::new());
+    assert!(
+        some_tree_too_deep(&complex, &s, &mut fewer_splits),
+        "TREE_SPLITS is more than the trees need"
+    );
+    let mut fewer_hops = Box::new(TreeScratch::<
+        { app::TREE_WALKS },
+        { app::TREE_SPLITS },
+        { app::TREE_HOPS - 1 },
+    >::new());
     assert!(
         some_tree_too_deep(&complex, &s, &mut fewer_hops),
         "TREE_HOPS is more than the trees need"
@@ -538,10 +555,15 @@ fn firmware_trees_match_owned_frame_tree() {
 }
 
 /// Whether the firmware's frame from some viewpoint is `TreeTooDeep` with `scratch`.
-fn some_tree_too_deep<S: vcx::partition::Storage, const N: usize, const H: usize>(
-    complex: &vcx::partition::Complex<S>,
+fn some_tree_too_deep<
+    T: vcx::partition::Storage,
+    const W: usize,
+    const S: usize,
+    const H: usize,
+>(
+    complex: &vcx::partition::Complex<T>,
     s: &vcx::SceneRef<'_>,
-    scratch: &mut vcx::walk::TreeScratch<N, H>,
+    scratch: &mut vcx::walk::TreeScratch<W, S, H>,
 ) -> bool {
     use vcx::render::Camera;
     viewpoints::VIEWPOINTS
@@ -712,9 +734,10 @@ fn lock_step_ray_trees_allocate_nothing() {
     assert!(checked >= 20, "{checked}");
 }
 
-/// A scratch too small for the tree, in frames or in hops, is an error, never a panic or a
-/// cut tree; a tree through mirrors only needs a hop per level; and the scratch's size is
-/// within the documented `328·N + 160·H + 640` (`320·N + 152·H + 520` on x86-64).
+/// A scratch too small for the tree, in walks, splits or hops, is an error, never a panic or
+/// a cut tree; a tree through mirrors only needs a walk per level and one more, a split and
+/// a hop per level; and the scratch's size is within the documented
+/// `328·W + 200·S + 160·H + 640` (`320·W + 192·S + 152·H + 520` on x86-64).
 #[test]
 fn tree_scratch_is_bounded() {
     let _g = lock();
@@ -735,25 +758,30 @@ fn tree_scratch_is_bounded() {
     let mut enough = Box::new(TreeScratch::<16>::new());
     let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut enough, |_| {});
     assert_eq!(r, Ok(()));
-    let mut mirror_hops = Box::new(TreeScratch::<16, 5>::new());
-    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut mirror_hops, |_| {});
+    let mut mirrors = Box::new(TreeScratch::<6, 5>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut mirrors, |_| {});
     assert_eq!(r, Ok(()));
-    let mut fewer_hops = Box::new(TreeScratch::<16, 4>::new());
+    let mut fewer_walks = Box::new(TreeScratch::<5, 16, 16>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut fewer_walks, |_| {});
+    assert_eq!(r, Err(WalkError::TreeTooDeep));
+    let mut fewer_splits = Box::new(TreeScratch::<16, 4, 16>::new());
+    let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut fewer_splits, |_| {});
+    assert_eq!(r, Err(WalkError::TreeTooDeep));
+    let mut fewer_hops = Box::new(TreeScratch::<16, 16, 4>::new());
     let r = frame_tree_into(&complex, &s, q, 5, d, d, &mut fewer_hops, |_| {});
     assert_eq!(r, Err(WalkError::TreeTooDeep));
-    for (n, h, size) in [
-        (1, 1, size_of::<TreeScratch<1>>()),
-        (9, 4, size_of::<TreeScratch<9, 4>>()),
-        (9, 9, size_of::<TreeScratch<9>>()),
-        (11, 5, size_of::<TreeScratch<11, 5>>()),
-        (16, 16, size_of::<TreeScratch<16>>()),
-        (19, 10, size_of::<TreeScratch<19, 10>>()),
-        (32, 32, size_of::<TreeScratch<32>>()),
+    for (w, sp, h, size) in [
+        (1, 1, 1, size_of::<TreeScratch<1>>()),
+        (5, 4, 4, size_of::<TreeScratch<5, 4>>()),
+        (6, 5, 5, size_of::<TreeScratch<6, 5>>()),
+        (9, 10, 10, size_of::<TreeScratch<9, 10>>()),
+        (16, 16, 16, size_of::<TreeScratch<16>>()),
+        (32, 32, 32, size_of::<TreeScratch<32>>()),
     ] {
-        println!("TreeScratch<{n}, {h}>: {size} bytes");
+        println!("TreeScratch<{w}, {sp}, {h}>: {size} bytes");
         assert!(
-            size <= 328 * n + 160 * h + 640,
-            "TreeScratch<{n}, {h}> is {size} bytes"
+            size <= 328 * w + 200 * sp + 160 * h + 640,
+            "TreeScratch<{w}, {sp}, {h}> is {size} bytes"
         );
     }
 }

@@ -315,25 +315,26 @@ struct Tree<'a, 's, S: Storage> {
 }
 
 /// A ray tree's working memory without a heap: the stack of frames (generations of traces
-/// in lock step), at most `N`, and the changes of eye (hops) held at once, at most `H`.
-/// A tree needs one frame for the primary walk, then per level of depth two (a mirror: its
-/// split and the reflected walk) or three (a refractive object: entry split, exit split
-/// and the walk), plus one per screen along the way; `N = 3·depth + 4` covers trees of
-/// `depth` with a few screens. It holds one hop per level for a mirror and two for a
-/// refractive object (screens change no eye), and never more hops than frames, so the
-/// default `H = N` always suffices; `H = depth` does for trees through mirrors only, and
-/// `2·depth` with refraction. Deeper trees fail with [`WalkError::TreeTooDeep`], never
-/// overflow; so do trees deeper than [`MAX_TREE_DEPTH`]. Reused across trees. Size on
-/// x86-64: `320·N + 152·H + 520` bytes — `N` frames of 320 bytes, per hop 56 bytes and the
-/// exact directions of its two mapped range ends (96 bytes, [`Mapped`]),
-/// and the branch, the start hints of anchored walks and the edge hints of splits
-/// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
-pub struct TreeScratch<const N: usize, const H: usize = N> {
-    stacks: Stacks<Fixed<N, H>>,
+/// in lock step) — at most `W` walks and `S` splits — and the changes of eye (hops) held
+/// at once, at most `H`. A tree needs one walk for the primary view, then per level of
+/// depth a split and a walk (a mirror: its split and the reflected walk) or two splits and
+/// a walk (a refractive object: entry split, exit split and the walk), plus a walk per
+/// screen along the way: `W = depth + 1` and `S = depth` through mirrors, `S = 2·depth`
+/// with refraction, and a few more walks for screens. Every split changes the eye once
+/// and screens change none, so the default `H = S` always suffices. Deeper trees fail
+/// with [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than
+/// [`MAX_TREE_DEPTH`]. Reused across trees. Size on x86-64:
+/// `320·W + 192·S + 152·H + 520` bytes — walks of 320 bytes, splits of 192 (each in its
+/// own stack: a split is smaller than a walk), per hop 56 bytes and the exact directions
+/// of its two mapped range ends (96 bytes, [`Mapped`]), and the branch, the start hints of
+/// anchored walks and the edge hints of splits (`tree_scratch_is_bounded` in
+/// `tests/tests/no_alloc.rs` prints it and checks it).
+pub struct TreeScratch<const W: usize, const S: usize = W, const H: usize = S> {
+    stacks: Stacks<Fixed<W, S, H>>,
 }
 
-/// The frames of a [`TreeScratch`], with room for `H` hops.
-struct Fixed<const N: usize, const H: usize>(heapless::Vec<Frame, N>);
+/// The stacks of a [`TreeScratch`]: `W` walks, `S` splits and `H` hops.
+struct Fixed<const W: usize, const S: usize, const H: usize>;
 
 /// Deepest ray tree a walk follows (the branch holds `MAX_TREE_DEPTH + 1` objects, as
 /// [`crate::render::Branch`]).
@@ -346,10 +347,12 @@ type Branch = heapless::Vec<ObjectId, { MAX_TREE_DEPTH + 1 }>;
 #[cfg(feature = "alloc")]
 const MAX_HOPS: usize = 2 * MAX_TREE_DEPTH;
 
-/// The stacks of a tree in progress: frames in `F` (fixed capacity, or a vector under
-/// `alloc`), the hops and the branch down to the top frame.
+/// The stacks of a tree in progress (fixed capacity, or vectors under `alloc`, as `F`
+/// has them): the frames — walks and splits in their own stacks, in one order: a split
+/// lies above the walks below its [`Split::walks`] — the hops and the branch down to the
+/// top frame.
 struct Stacks<F: Frames> {
-    frames: F,
+    frames: FrameStacks<F>,
     hops: F::Hops,
     branch: Branch,
     /// The exact directions of the range ends mapped through the hops, one [`ExactPair`]
@@ -362,8 +365,9 @@ struct Stacks<F: Frames> {
     #[cfg(any(feature = "mirrors", feature = "refraction"))]
     edges: Edges,
     /// The places of frames that left the stack, held by others ([`Level::held`]): a
-    /// stack of `N` frames holds `N` with these, as it would hold the frames themselves.
-    held: usize,
+    /// stack of `W` walks holds `W` with these, as it would hold the walks themselves;
+    /// and so for splits.
+    held: (usize, usize),
 }
 
 /// Per floor object (direct-mapped by its id), the start cylinder of the last walk anchored
@@ -388,16 +392,16 @@ const FLOOR_HINTS: usize = 16;
 /// slots save no more). Only a hint ([`Cut::hint`]); emptied with the other stacks at
 /// every tree.
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-type Edges = [Option<(ObjectId, usize)>; EDGE_HINTS];
+type Edges = [Option<(ObjectId, u32)>; EDGE_HINTS];
 
 /// Slots of [`Edges`].
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 const EDGE_HINTS: usize = 8;
 
 impl<F: Frames> Stacks<F> {
-    const fn new(frames: F, hops: F::Hops, exacts: F::Exacts) -> Self {
+    const fn new(walks: F::Walks, splits: F::Splits, hops: F::Hops, exacts: F::Exacts) -> Self {
         Stacks {
-            frames,
+            frames: FrameStacks { walks, splits },
             hops,
             branch: heapless::Vec::new(),
             exacts,
@@ -405,7 +409,7 @@ impl<F: Frames> Stacks<F> {
             floors: [None; FLOOR_HINTS],
             #[cfg(any(feature = "mirrors", feature = "refraction"))]
             edges: [None; EDGE_HINTS],
-            held: 0,
+            held: (0, 0),
         }
     }
 
@@ -416,28 +420,64 @@ impl<F: Frames> Stacks<F> {
         Ok((len(self.hops.len())?, len(self.branch.len())?))
     }
 
-    /// [`WalkError::TreeTooDeep`] unless `n` more frames fit beside the held places.
-    fn room(&self, n: usize) -> Result<(), WalkError> {
-        if self.frames.room() < self.held.saturating_add(n) {
+    /// [`WalkError::TreeTooDeep`] unless a frame of `level` fits beside the held places,
+    /// with the places `level` holds: a split if `split`, else a walk.
+    fn room(&self, level: Level, split: bool) -> Result<(), WalkError> {
+        let (walks, splits) = level.held();
+        let (walks, splits) = (walks + usize::from(!split), splits + usize::from(split));
+        if self.frames.walks.room() < self.held.0.saturating_add(walks)
+            || self.frames.splits.room() < self.held.1.saturating_add(splits)
+        {
             return Err(WalkError::TreeTooDeep);
         }
         Ok(())
     }
 
-    /// Pushes `f` of `level`, which takes its held places too. Inlined, so that the frame
-    /// is built in its slot: a call moves it there (a `memcpy` per push).
+    /// Takes the places `level` holds.
+    fn hold(&mut self, level: Level) {
+        let (walks, splits) = level.held();
+        self.held = (self.held.0 + walks, self.held.1 + splits);
+    }
+
+    /// Pushes the walk `f` of `level`, which takes its held places too. Inlined, so that
+    /// the frame is built in its slot: a call moves it there (a `memcpy` per push).
     #[inline(always)]
     fn push(&mut self, level: Level, f: Frame) -> Result<(), WalkError> {
-        self.room(1 + usize::from(level.held))?;
-        self.frames.push(f)?;
-        self.held += usize::from(level.held);
+        self.room(level, false)?;
+        self.frames.walks.push(f)?;
+        self.hold(level);
+        Ok(())
+    }
+
+    /// Pushes the split `s` of `level` (`s.walks` is set here), as [`Stacks::push`].
+    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    #[inline(always)]
+    fn push_split(&mut self, level: Level, mut s: Split) -> Result<(), WalkError> {
+        self.room(level, true)?;
+        s.walks = u16::try_from(self.frames.walks.len()).map_err(|_| WalkError::TreeTooDeep)?;
+        self.frames.splits.push(s)?;
+        self.hold(level);
         Ok(())
     }
 
     /// Pops the top frame of `level`, leaving what it pushed with it.
     fn leave(&mut self, level: Level) {
         self.frames.pop();
-        self.held = self.held.saturating_sub(usize::from(level.held));
+        let (walks, splits) = level.held();
+        self.held = (
+            self.held.0.saturating_sub(walks),
+            self.held.1.saturating_sub(splits),
+        );
+    }
+
+    /// Empties the stacks for a new tree.
+    fn clear(&mut self) {
+        self.frames.walks.clear();
+        self.frames.splits.clear();
+        self.held = (0, 0);
+        self.hops.clear();
+        self.branch.clear();
+        self.exacts.truncate_to(0);
     }
 
     /// Pops the exhausted top frame of `level` and what it pushed with it.
@@ -454,22 +494,120 @@ impl<F: Frames> Stacks<F> {
     }
 }
 
-/// A stack of frames.
+/// The storage of a tree's stacks: fixed capacity ([`Fixed`]) or vectors ([`Growing`]).
 trait Frames {
-    /// The stack of exact directions that goes with it. Each entry is pushed by
-    /// [`Tree::change_eye`] right before the one frame that owns it (its `Level::exacts` is
-    /// the length below the entry) and popped with that frame, and the primary frame owns
-    /// none: the stack never holds more entries than hops (nor hops than frames), so a
-    /// capacity of `H` entries for `H` hops never overflows (two exact directions each).
+    /// The stack of exact directions. Each entry is pushed by [`Tree::change_eye`] right
+    /// before the one frame that owns it (its `Level::exacts` is the length below the
+    /// entry) and popped with that frame, and the primary frame owns none: the stack never
+    /// holds more entries than hops (nor hops than splits), so a capacity of `H` entries
+    /// for `H` hops never overflows (two exact directions each).
     type Exacts: ExactStack;
-    /// The stack of hops that goes with it.
+    /// The stack of hops.
     type Hops: HopStack;
-    /// How many more frames fit.
+    /// The stack of walks.
+    type Walks: FrameStack<Frame>;
+    /// The stack of splits (empty without mirrors and refraction).
+    type Splits: FrameStack<Split>;
+}
+
+/// A stack of frames of one kind.
+trait FrameStack<T> {
+    /// How many more fit.
     fn room(&self) -> usize;
-    fn push(&mut self, f: Frame) -> Result<(), WalkError>;
+    fn len(&self) -> usize;
+    /// [`WalkError::TreeTooDeep`] when full.
+    fn push(&mut self, f: T) -> Result<(), WalkError>;
     fn pop(&mut self);
-    fn top(&mut self) -> Option<&mut Frame>;
+    fn last_mut(&mut self) -> Option<&mut T>;
     fn clear(&mut self);
+}
+
+impl<T, const N: usize> FrameStack<T> for heapless::Vec<T, N> {
+    fn room(&self) -> usize {
+        N - self.as_slice().len()
+    }
+    fn len(&self) -> usize {
+        self.as_slice().len()
+    }
+    fn push(&mut self, f: T) -> Result<(), WalkError> {
+        heapless::Vec::push(self, f).map_err(|_| WalkError::TreeTooDeep)
+    }
+    fn pop(&mut self) {
+        heapless::Vec::pop(self);
+    }
+    fn last_mut(&mut self) -> Option<&mut T> {
+        <[T]>::last_mut(self)
+    }
+    fn clear(&mut self) {
+        heapless::Vec::clear(self)
+    }
+}
+
+// The `alloc` entry points grow the stacks as needed: fixed ones of the largest size would
+// be moved and cleared on every call.
+#[cfg(feature = "alloc")]
+impl<T> FrameStack<T> for Vec<T> {
+    fn room(&self) -> usize {
+        usize::MAX
+    }
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    fn push(&mut self, f: T) -> Result<(), WalkError> {
+        Vec::push(self, f);
+        Ok(())
+    }
+    fn pop(&mut self) {
+        Vec::pop(self);
+    }
+    fn last_mut(&mut self) -> Option<&mut T> {
+        <[T]>::last_mut(self)
+    }
+    fn clear(&mut self) {
+        Vec::clear(self)
+    }
+}
+
+/// The walks and splits of a tree, in one stack order: a split lies above the walks below
+/// its [`Split::walks`] and below the others.
+struct FrameStacks<F: Frames> {
+    walks: F::Walks,
+    splits: F::Splits,
+}
+
+impl<F: Frames> FrameStacks<F> {
+    /// Whether the top frame is a split.
+    fn split_on_top(&mut self) -> bool {
+        #[cfg(any(feature = "mirrors", feature = "refraction"))]
+        if let Some(s) = self.splits.last_mut() {
+            return usize::from(s.walks) == self.walks.len();
+        }
+        false
+    }
+
+    /// The top frame.
+    fn top(&mut self) -> Option<Top<'_>> {
+        if self.split_on_top() {
+            #[cfg(any(feature = "mirrors", feature = "refraction"))]
+            return self.splits.last_mut().map(Top::Split);
+        }
+        self.walks.last_mut().map(Top::Walk)
+    }
+
+    fn pop(&mut self) {
+        if self.split_on_top() {
+            self.splits.pop();
+        } else {
+            self.walks.pop();
+        }
+    }
+}
+
+/// The top frame of a tree's stacks.
+enum Top<'f> {
+    Walk(&'f mut Frame),
+    #[cfg(any(feature = "mirrors", feature = "refraction"))]
+    Split(&'f mut Split),
 }
 
 /// The exact directions of the two ends of a range mapped through a hop, by the end's
@@ -562,47 +700,34 @@ fn split_top(s: &mut [ExactPair]) -> Result<Reserved<'_>, WalkError> {
     Ok((top, below.as_flattened()))
 }
 
-impl<const N: usize, const H: usize> Frames for Fixed<N, H> {
+impl<const W: usize, const S: usize, const H: usize> Frames for Fixed<W, S, H> {
     type Exacts = ExactSlots<heapless::Vec<ExactPair, H>>;
     type Hops = heapless::Vec<Hop, H>;
-    fn room(&self) -> usize {
-        N - self.0.len()
-    }
-    fn push(&mut self, f: Frame) -> Result<(), WalkError> {
-        self.0.push(f).map_err(|_| WalkError::TreeTooDeep)
-    }
-    fn pop(&mut self) {
-        self.0.pop();
-    }
-    fn top(&mut self) -> Option<&mut Frame> {
-        self.0.last_mut()
-    }
-    fn clear(&mut self) {
-        self.0.clear()
-    }
+    type Walks = heapless::Vec<Frame, W>;
+    type Splits = heapless::Vec<Split, S>;
 }
 
-// The `alloc` entry points grow the stack as needed: a fixed one of the largest size would
-// be moved and cleared on every call.
+/// The stacks of the `alloc` entry points.
 #[cfg(feature = "alloc")]
-impl Frames for Vec<Frame> {
+struct Growing;
+
+#[cfg(feature = "alloc")]
+impl Frames for Growing {
     type Exacts = ExactSlots<Vec<ExactPair>>;
     type Hops = heapless::Vec<Hop, MAX_HOPS>;
-    fn room(&self) -> usize {
-        usize::MAX
-    }
-    fn push(&mut self, f: Frame) -> Result<(), WalkError> {
-        Vec::push(self, f);
-        Ok(())
-    }
-    fn pop(&mut self) {
-        Vec::pop(self);
-    }
-    fn top(&mut self) -> Option<&mut Frame> {
-        self.last_mut()
-    }
-    fn clear(&mut self) {
-        Vec::clear(self)
+    type Walks = Vec<Frame>;
+    type Splits = Vec<Split>;
+}
+
+#[cfg(feature = "alloc")]
+impl Stacks<Growing> {
+    fn growing() -> Self {
+        Stacks::new(
+            Vec::new(),
+            Vec::new(),
+            heapless::Vec::new(),
+            ExactSlots::new(Vec::new()),
+        )
     }
 }
 
@@ -631,12 +756,13 @@ impl<const H: usize> HopStack for heapless::Vec<Hop, H> {
     }
 }
 
-impl<const N: usize, const H: usize> TreeScratch<N, H> {
+impl<const W: usize, const S: usize, const H: usize> TreeScratch<W, S, H> {
     /// Empty scratch.
     pub const fn new() -> Self {
         TreeScratch {
             stacks: Stacks::new(
-                Fixed(heapless::Vec::new()),
+                heapless::Vec::new(),
+                heapless::Vec::new(),
                 heapless::Vec::new(),
                 ExactSlots::new(heapless::Vec::new()),
             ),
@@ -644,19 +770,19 @@ impl<const N: usize, const H: usize> TreeScratch<N, H> {
     }
 }
 
-impl<const N: usize, const H: usize> core::fmt::Debug for TreeScratch<N, H> {
+impl<const W: usize, const S: usize, const H: usize> core::fmt::Debug for TreeScratch<W, S, H> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "TreeScratch<{N}, {H}>")
+        write!(f, "TreeScratch<{W}, {S}, {H}>")
     }
 }
 
-impl<const N: usize, const H: usize> Default for TreeScratch<N, H> {
+impl<const W: usize, const S: usize, const H: usize> Default for TreeScratch<W, S, H> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// A generation of the tree in progress.
+/// A walk of the tree in progress (the other frames are [`Split`]s).
 // Without a heap the variants cannot be boxed: a stack slot holds the largest.
 #[allow(clippy::large_enum_variant)]
 enum Frame {
@@ -665,9 +791,6 @@ enum Frame {
     /// A walk anchored to a floor object behind a screen, mirror or refractive object.
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     Walk(RangeWalk),
-    /// The edges of a mirror or refractive object across a piece.
-    #[cfg(any(feature = "mirrors", feature = "refraction"))]
-    Split(Split),
 }
 
 /// What every frame shares: its eye, the depth left to its pieces, its walking direction
@@ -688,10 +811,20 @@ struct Level {
     hops: u8,
     branch: u8,
     exacts: u8,
-    /// The places of the frames that left the stack with their last piece, which this one
-    /// continues: it stands for them in the stack's capacity until it is popped (they
-    /// would have been popped right after it) and restores the stacks as they would have.
-    held: u16,
+    /// The places of the walks and splits that left the stack with their last piece,
+    /// which this frame continues: it stands for them in the stacks' capacity until it is
+    /// popped (they would have been popped right after it) and restores the stacks as they
+    /// would have. Walks may be many (screens), splits are at most two per level. Two
+    /// fields, not a pair: a pair would pad the level to 32 bytes.
+    held_walks: u16,
+    held_splits: u8,
+}
+
+impl Level {
+    /// The walks and splits whose places it holds.
+    fn held(&self) -> (usize, usize) {
+        (self.held_walks.into(), self.held_splits.into())
+    }
 }
 
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
@@ -703,15 +836,24 @@ impl Level {
             hops,
             branch,
             exacts: u8::try_from(sc.exacts.entries().len()).map_err(|_| WalkError::TreeTooDeep)?,
-            held: 0,
+            held_walks: 0,
+            held_splits: 0,
             ..self
         })
     }
 
-    /// `self` also holding the place of the frame that leaves the stack.
-    fn holding(self) -> Result<Level, WalkError> {
+    /// `self` also holding the place of the frame that leaves the stack: a split if
+    /// `split`, else a walk.
+    fn holding(self, split: bool) -> Result<Level, WalkError> {
+        let (mut walks, mut splits) = (self.held_walks, self.held_splits);
+        if split {
+            splits = splits.checked_add(1).ok_or(WalkError::TreeTooDeep)?;
+        } else {
+            walks = walks.checked_add(1).ok_or(WalkError::TreeTooDeep)?;
+        }
         Ok(Level {
-            held: self.held.checked_add(1).ok_or(WalkError::TreeTooDeep)?,
+            held_walks: walks,
+            held_splits: splits,
             ..self
         })
     }
@@ -792,7 +934,13 @@ struct Split {
     from: Dir,
     to: Dir,
     first: Boundary,
+    /// The walks below it in the stack order ([`Stacks::push_split`]).
+    walks: u16,
 }
+
+/// No splits without mirrors and refraction.
+#[cfg(not(any(feature = "mirrors", feature = "refraction")))]
+enum Split {}
 
 /// How far a split has cut its range: the object, how its pieces continue, the last edge
 /// piece yielded. Apart from the range, which a split done with its first piece never
@@ -803,11 +951,16 @@ struct Cut {
     m: ObjectId,
     kind: SplitKind,
     /// The start direction (from the eye) and the edge (index in `m`) of the last edge
-    /// piece yielded.
-    last: Option<((i128, i128), usize)>,
+    /// piece yielded. In `i64`s and a `u32` (48 bytes less than `i128`s and a `usize`; a
+    /// tree keeps a cut per split): the direction is an [`Angle`]'s or the difference of
+    /// two query points, each below 2⁵³ in magnitude, and an object's edges are at most
+    /// [`crate::scene::MAX_VERTICES`].
+    last: Option<u32>,
+    /// The start direction of the last piece, where `last` is some.
+    last_start: (i64, i64),
     /// An edge (index in `m`) to try first for the first piece: taken if its piece starts
     /// at the start of the range (see [`Edges`]).
-    hint: Option<usize>,
+    hint: Option<u32>,
     done: bool,
 }
 
@@ -1162,11 +1315,7 @@ fn collect<S: Storage>(
     vertices: bool,
     context: bool,
 ) -> Result<Vec<TreeInterval>, WalkError> {
-    let mut stacks = Stacks::new(
-        Vec::new(),
-        heapless::Vec::new(),
-        ExactSlots::new(Vec::new()),
-    );
+    let mut stacks = Stacks::growing();
     let mut out = Vec::new();
     let mut sink = |i: Interval<'_>| {
         out.push(TreeInterval {
@@ -1198,14 +1347,14 @@ fn collect<S: Storage>(
 /// Errors as [`ray_tree`], and [`WalkError::TreeTooDeep`] when the tree needs more frames
 /// or hops than `scratch` holds.
 #[allow(clippy::too_many_arguments)]
-pub fn frame_tree_into<S: Storage, const N: usize, const H: usize>(
-    complex: &Complex<S>,
+pub fn frame_tree_into<T: Storage, const W: usize, const S: usize, const H: usize>(
+    complex: &Complex<T>,
     scene: &SceneRef<'_>,
     q: QueryPoint,
     depth: usize,
     from: Direction,
     to: Direction,
-    scratch: &mut TreeScratch<N, H>,
+    scratch: &mut TreeScratch<W, S, H>,
     mut emit: impl FnMut(TreeSpan<'_>),
 ) -> Result<(), WalkError> {
     let start = complex.trace_start(scene, q)?;
@@ -1241,11 +1390,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
 ) -> Result<(), WalkError> {
     let tree = Tree { complex, scene };
     let (f, t) = (Angle::constant(from), Angle::constant(to));
-    scratch.frames.clear();
-    scratch.held = 0;
-    scratch.hops.clear();
-    scratch.branch.clear();
-    scratch.exacts.truncate_to(0);
+    scratch.clear();
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     {
         scratch.floors = [None; FLOOR_HINTS];
@@ -1298,7 +1443,8 @@ impl<S: Storage> Tree<'_, '_, S> {
                 hops: 0,
                 branch: 0,
                 exacts: 0,
-                held: 0,
+                held_walks: 0,
+                held_splits: 0,
             },
             events: Events::new(walker, true),
             f,
@@ -1408,7 +1554,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             // A piece is written in place and resolved by reference, an edge resolved where
             // it is made: every move of a piece (128 bytes) is a copy.
             match top {
-                Frame::Primary(w) => {
+                Top::Walk(Frame::Primary(w)) => {
                     let level = w.level;
                     fresh = if w.next_piece(self, piece, &mut cluster)? {
                         self.resolve_piece(sc, level, piece, em, false)?
@@ -1418,7 +1564,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     };
                 }
                 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
-                Frame::Walk(w) => {
+                Top::Walk(Frame::Walk(w)) => {
                     let level = w.level;
                     let (c, at) = (&mut cluster, (stage, level_len));
                     fresh = if w.next_piece(
@@ -1440,7 +1586,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     };
                 }
                 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-                Frame::Split(s) => {
+                Top::Split(s) => {
                     let (level, m, kind) = (s.level, s.cut.m, s.cut.kind);
                     let at = (stage, level_len);
                     fresh = match s.next_edge(
@@ -1499,7 +1645,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // A frame pushed here restores the stacks as they are now, or in place of `level`'s.
         #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
         let here = if left {
-            level.holding()?
+            level.holding(false)?
         } else {
             level.marks(sc)?
         };
@@ -3033,7 +3179,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         p: &mut Piece,
     ) -> Result<bool, WalkError> {
         // The split's place, as if pushed.
-        sc.room(1 + usize::from(level.held))?;
+        sc.room(level, true)?;
         // Direct-mapped: the slot holds `m`'s edge, or another object's.
         let slot = m.0 as usize % EDGE_HINTS;
         let hint = sc.edges.get(slot).copied().flatten();
@@ -3042,6 +3188,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             m,
             kind,
             last: None,
+            last_start: (0, 0),
             hint,
             done: false,
         };
@@ -3056,21 +3203,22 @@ impl<S: Storage> Tree<'_, '_, S> {
             sc.restore(level);
             return Ok(false);
         };
-        if let (Some(h), Some((_, k))) = (sc.edges.get_mut(slot), cut.last) {
+        if let (Some(h), Some(k)) = (sc.edges.get_mut(slot), cut.last) {
             *h = Some((m, k));
         }
         let left = cut.done;
         if !left {
             // More pieces may follow: the frame keeps the range, before `p` becomes the first.
-            sc.push(
+            sc.push_split(
                 level,
-                Frame::Split(Split {
+                Split {
                     level,
                     cut,
                     from: p.from.clone(),
                     to: p.to.clone(),
                     first: p.boundary,
-                }),
+                    walks: 0,
+                },
             )?;
         }
         // `p` is the range: the ends and boundary the piece shares with it are there.
@@ -3128,7 +3276,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             ..level
         };
         let here = if left {
-            turned.holding()?
+            turned.holding(true)?
         } else {
             turned.marks(sc)?
         };
@@ -3136,21 +3284,23 @@ impl<S: Storage> Tree<'_, '_, S> {
         sc.hops.push(hop)?;
         match kind {
             #[cfg(feature = "refraction")]
-            SplitKind::Entry(eta) => sc.push(
+            SplitKind::Entry(eta) => sc.push_split(
                 here,
-                Frame::Split(Split {
+                Split {
                     level: here,
                     cut: Cut {
                         m,
                         kind: SplitKind::Exit(eta),
                         last: None,
+                        last_start: (0, 0),
                         hint: None,
                         done: false,
                     },
                     from: p.from.clone(),
                     to: p.to.clone(),
                     first: p.boundary,
-                }),
+                    walks: 0,
+                },
             ),
             _ => {
                 sc.branch.push(m).map_err(|_| WalkError::TreeTooDeep)?;
@@ -3381,7 +3531,11 @@ impl Cut {
         // counter-clockwise in decreasing order, back edges in increasing order), and the
         // pieces of the range are contiguous: after the first piece, the next is the
         // neighbouring edge's, or there is none.
-        let next = self.last.and_then(|(l, k)| {
+        let next = self.last.and_then(|k| {
+            let (l, k) = (
+                (i128::from(self.last_start.0), i128::from(self.last_start.1)),
+                k as usize,
+            );
             let n = tree.scene.object(self.m).map_or(0, |o| o.len());
             let up = front != ccw;
             let k = if up {
@@ -3400,7 +3554,7 @@ impl Cut {
         // turns (a wrong guess costs time, not a wrong piece).
         let first = || {
             let tried = match self.hint {
-                Some(k) => tree.facing_edge(eye, self.m, front, k),
+                Some(k) => tree.facing_edge(eye, self.m, front, k as usize),
                 None => {
                     tree.edge_toward(eye, self.m, front, if ccw { &lo.angle } else { &hi.angle })
                 }
@@ -3436,10 +3590,16 @@ impl Cut {
             self.done = true;
             return None;
         };
-        self.last = Some((key, k));
+        // Never `None` (see `last`), which would only end the split early.
+        let last =
+            (i64::try_from(key.0).ok().zip(i64::try_from(key.1).ok())).zip(u32::try_from(k).ok());
+        self.done = last.is_none();
+        if let Some((start, k)) = last {
+            (self.last_start, self.last) = (start, Some(k));
+        }
         // The piece reaches the end of the range: the facing edges' pieces are disjoint, so
         // no later one is nonempty.
-        self.done = end.is_none();
+        self.done |= end.is_none();
         Some(EdgePiece { edge, start, end })
     }
 }
@@ -4209,8 +4369,8 @@ mod tests {
     #[test]
     fn fresh_range_walk_pieces_are_the_written_ones() {
         use super::{
-            cross, ranked, Boundary, Cluster, Dir, Ends, ExactSlots, Frame, Frames, Level, Mapped,
-            Piece, Stacks, Tree,
+            cross, ranked, Boundary, Cluster, Dir, Ends, Frame, Level, Mapped, Piece, Stacks, Top,
+            Tree,
         };
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
@@ -4267,15 +4427,12 @@ mod tests {
                         hops: 0,
                         branch: 0,
                         exacts: 0,
-                        held: 0,
+                        held_walks: 0,
+                        held_splits: 0,
                     };
                     for m in (0..s.len() as u32).map(ObjectId) {
                         let run = |fresh: bool| {
-                            let mut sc = Stacks::new(
-                                Vec::new(),
-                                heapless::Vec::new(),
-                                ExactSlots::new(Vec::new()),
-                            );
+                            let mut sc = Stacks::growing();
                             tree.push_range_walk(&mut sc, level, m, (&from, &to), &first, false)
                                 .ok()?;
                             let mut out = Piece::empty();
@@ -4285,7 +4442,7 @@ mod tests {
                             }
                             let (mut fresh, mut c) = (fresh, Cluster::empty());
                             let mut written = Vec::new();
-                            let Some(Frame::Walk(w)) = sc.frames.top() else {
+                            let Some(Top::Walk(Frame::Walk(w))) = sc.frames.top() else {
                                 return None;
                             };
                             while w
@@ -4382,11 +4539,12 @@ mod tests {
                     let turn = cross(from.angle.vector(), to.angle.vector());
                     let ccw = turn > 0;
                     for kind in [SplitKind::Entry(eta), SplitKind::Exit(eta)] {
-                        let run = |hint: Option<usize>| {
+                        let run = |hint: Option<u32>| {
                             let mut cut = Cut {
                                 m,
                                 kind,
                                 last: None,
+                                last_start: (0, 0),
                                 hint,
                                 done: false,
                             };
@@ -4401,8 +4559,8 @@ mod tests {
                             }
                             out
                         };
-                        let scan = run(Some(o.len()));
-                        for hint in (0..o.len()).map(Some).chain([None, Some(usize::MAX)]) {
+                        let scan = run(Some(o.len() as u32));
+                        for hint in (0..o.len() as u32).map(Some).chain([None, Some(u32::MAX)]) {
                             assert_eq!(run(hint), scan, "{q:?} {from:?} {to:?} {m:?} {hint:?}");
                         }
                         let start = if ccw { &from.angle } else { &to.angle };

@@ -565,17 +565,17 @@ pub(super) fn sizes(s: &Sizes, p: &mut Progress) -> Result<Output, Failure> {
             met: None,
         },
     };
-    // The RAM of a depth-5 ray tree walked without a heap: the scratch of its frames and
-    // hops (`TreeScratch<N, H>`, N = 2·5 + 1 and H = 5 through mirrors only; N = 3·5 + 4
-    // and H = 10 with refraction and screens), as the type is on this machine.
+    // The RAM of a depth-5 ray tree walked without a heap: the scratch of its walks, splits
+    // and hops (`TreeScratch<W, S, H>`: W = 5 + 1, S = H = 5 through mirrors only; W = 5 +
+    // 1 + 3 screens, S = H = 2·5 with refraction), as the type is on this machine.
     const TREE_LIMIT: usize = 2 * 1024;
-    let mirrors = core::mem::size_of::<vcx::walk::TreeScratch<11, 5>>();
-    let all = core::mem::size_of::<vcx::walk::TreeScratch<19, 10>>();
+    let mirrors = core::mem::size_of::<vcx::walk::TreeScratch<6, 5>>();
+    let all = core::mem::size_of::<vcx::walk::TreeScratch<9, 10>>();
     let _ = write!(
         notes,
         " Ray-tree RAM: a depth-5 tree walked without a heap (`walk::frame_tree_into`) \
-         needs a `TreeScratch<11, 5>` through mirrors only, {} bytes, and a \
-         `TreeScratch<19, 10>` with refraction and screens, {} bytes (`size_of` on this \
+         needs a `TreeScratch<6, 5>` through mirrors only, {} bytes, and a \
+         `TreeScratch<9, 10>` with refraction and three screens, {} bytes (`size_of` on this \
          machine), besides its call stack and output buffer (ARCHITECTURE.md, \"RAM of a \
          ray tree\"). Target of the device-format issue: a depth-5 walk in under 2 KiB — {}: \
          {}× the target.",
