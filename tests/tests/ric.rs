@@ -449,3 +449,37 @@ fn uncompacted_histories_contract_to_the_compacted_ones() {
     }
     assert!(pieces > 0, "no insertion both split and merged");
 }
+
+/// Replaying a built history's insertion order into a fresh history gives the same history
+/// (what `vcx bench build --growth` relies on), and its size obeys the backwards-analysis
+/// bound of a randomized incremental construction: the i-th insertion changes at most
+/// D·k_i/i cylinders in expectation (k_i: live cylinders after it; D: the objects defining
+/// a cylinder), so the history's nodes are O(Σ k_i/i). D = 8 is generous (≈ 3.3 measured).
+#[test]
+fn replaying_the_order_rebuilds_the_history_within_the_backwards_analysis_bound() {
+    let f = generate(SceneKind::Grid, 64, 1).unwrap();
+    let s = f.scene.as_ref();
+    for seed in [1, 2] {
+        let options = vcx::partition::BuildOptions {
+            seed,
+            ..Default::default()
+        };
+        let built = History::build(&s, &options).unwrap();
+        let mut h = History::new();
+        let mut sum = 0.0;
+        for (i, &id) in (1..).zip(built.order()) {
+            h.insert(&s, id).unwrap();
+            sum += h.live_cylinders() as f64 / f64::from(i);
+        }
+        let (st, want) = (h.stats(), built.stats());
+        assert_eq!(st, want, "seed {seed}");
+        assert_eq!(
+            describe(&h.complex(&s).unwrap(), |o| o.0),
+            describe(&built.complex(&s).unwrap(), |o| o.0),
+            "seed {seed}"
+        );
+        let ratio = st.nodes as f64 / sum;
+        println!("seed {seed}: {st:?}, sum k_i/i = {sum:.1}, nodes / sum = {ratio:.2}");
+        assert!(ratio <= 8.0, "seed {seed}: nodes / sum k_i/i = {ratio:.2}");
+    }
+}

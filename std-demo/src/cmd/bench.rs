@@ -1,14 +1,19 @@
 //! `vcx bench`: measurements, not tests. Every number printed comes from the run that
 //! prints it; `BENCHMARKS.md` records them with the command and the machine.
 //!
-//! * `vcx bench build [--n 16,64,256] [--method ric|sweep|both] [--seed S] [--repeat R]`:
+//! * `vcx bench build [--n 16,64,256] [--method ric|sweep|both] [--seed S] [--repeat R]
+//!   [--growth]`:
 //!   the paper's grid scene (Fig. 20; `vcx gen grid N --seed S`) for each n: construction
 //!   seconds (best of R runs), cylinders, vertices, free bitangents, history nodes, links
 //!   and depth, and the bytes of the arenas (cylinders, vertices, history links). For
 //!   `ric` the same history built without search path compaction (§4.4,
 //!   `BuildOptions::compaction`) side by side: `uncompacted_seconds`,
 //!   `uncompacted_history_nodes`, `_links`, `_depth`, `_bytes` (`null` for the sweep).
-//!   One JSON object per line.
+//!   With `--growth` (`ric` only) the construction is replayed untimed in the same order,
+//!   reading the size k_i of the complex of the first i objects after each insertion:
+//!   `prefix_live_sum` (Σ k_i/i, the backwards-analysis bound on the history's size up to
+//!   the constant), `peak_live_per_object` (max k_i/i), `peak_at` (that i) and
+//!   `nodes_over_prefix_live_sum`. One JSON object per line.
 //! * `vcx bench views SCENE [--points FILE | --random K] [--seed S] [--repeat R]`: the
 //!   full 360° view from each point (screens left out, complex built once by the sweep),
 //!   or with `--depth D` the ray tree (screens kept): median microseconds per view (each
@@ -67,6 +72,10 @@ pub struct BuildArgs {
     /// Runs per size; the best time is reported.
     #[arg(long, default_value_t = 1)]
     pub repeat: u32,
+    /// After the timed runs, replay the randomized construction untimed and report the
+    /// sizes of the complexes of its prefixes (`ric` only).
+    #[arg(long)]
+    pub growth: bool,
 }
 
 /// Which construction to measure.
@@ -154,6 +163,8 @@ pub(crate) struct Timed {
     pub complex: Complex,
     /// The history's statistics (randomized construction only).
     pub history: Option<vcx::partition::HistoryStats>,
+    /// The insertion order (randomized construction only; empty for the sweep).
+    pub order: Vec<ObjectId>,
 }
 
 impl Timed {
@@ -179,23 +190,68 @@ pub(crate) fn time_build(
         let built = if ric {
             let h = History::build(scene, options).map_err(internal)?;
             times.push(t.elapsed().as_secs_f64());
-            (h.complex(scene).map_err(internal)?, Some(h.stats()))
+            let c = h.complex(scene).map_err(internal)?;
+            (c, Some(h.stats()), h.order().to_vec())
         } else {
             let c = build_by_sweep(scene).map_err(internal)?;
             times.push(t.elapsed().as_secs_f64());
-            (c, None)
+            (c, None, Vec::new())
         };
         last = Some(built);
     }
-    let (complex, history) = last.ok_or_else(|| internal("no run"))?;
+    let (complex, history, order) = last.ok_or_else(|| internal("no run"))?;
     Ok(Timed {
         times,
         complex,
         history,
+        order,
     })
 }
 
+/// The sizes k_i of the complexes of the prefixes of a randomized construction's
+/// insertion order (`vcx bench build --growth`). By backwards analysis the expected
+/// structural change of the i-th insertion is at most D·k_i/i (D: the objects defining a
+/// cylinder), so Σ k_i/i bounds the history's size up to a constant; random prefixes of a
+/// large grid are sparser and see more, so k_i/i peaks before the end.
+struct Growth {
+    /// Σ_i k_i / i.
+    sum: f64,
+    /// max_i k_i / i.
+    peak: f64,
+    /// The (1-based) i of the peak.
+    peak_at: usize,
+    /// The replayed history's statistics.
+    stats: vcx::partition::HistoryStats,
+}
+
+/// Replays the insertions of `order` into a fresh history (untimed), reading
+/// `live_cylinders()` after each.
+fn growth(scene: &SceneRef<'_>, order: &[ObjectId]) -> Result<Growth, Failure> {
+    let mut h = History::new();
+    let mut g = Growth {
+        sum: 0.0,
+        peak: 0.0,
+        peak_at: 0,
+        stats: h.stats(),
+    };
+    for (i, &id) in (1..).zip(order) {
+        h.insert(scene, id).map_err(internal)?;
+        let per = h.live_cylinders() as f64 / i as f64;
+        g.sum += per;
+        if per > g.peak {
+            (g.peak, g.peak_at) = (per, i);
+        }
+    }
+    g.stats = h.stats();
+    Ok(g)
+}
+
 fn build(a: &BuildArgs) -> Result<(), Failure> {
+    if a.growth && a.method == MethodChoice::Sweep {
+        return Err(Failure::bad_input(
+            "--growth measures the randomized construction: use --method ric or both",
+        ));
+    }
     let mut out = String::new();
     for &n in &a.n {
         let file =
@@ -228,7 +284,7 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
                 None
             };
             let uh = uncompacted.and_then(|u| u.1);
-            let line = json!({
+            let mut line = json!({
                 "scene": "grid",
                 "n": n,
                 "method": if m == MethodChoice::Ric { "ric" } else { "sweep" },
@@ -247,6 +303,17 @@ fn build(a: &BuildArgs) -> Result<(), Failure> {
                 "uncompacted_history_depth": uh.map(|h| h.depth),
                 "uncompacted_history_bytes": uh.map(|h| history_bytes(&h)),
             });
+            if let (true, Some(h)) = (a.growth, h) {
+                let g = growth(&scene, &t.order)?;
+                // Same order, same history: a difference would be a bug (nondeterminism).
+                if (g.stats.nodes, g.stats.links) != (h.nodes, h.links) {
+                    return Err(internal("the replayed history differs from the built one"));
+                }
+                line["prefix_live_sum"] = json!(g.sum);
+                line["peak_live_per_object"] = json!(g.peak);
+                line["peak_at"] = json!(g.peak_at);
+                line["nodes_over_prefix_live_sum"] = json!(h.nodes as f64 / g.sum);
+            }
             out.push_str(&line.to_string());
             out.push('\n');
             eprintln!("{line}");
