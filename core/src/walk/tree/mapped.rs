@@ -80,11 +80,11 @@ pub(super) struct Terms {
 }
 
 impl Terms {
-    /// The terms of `hop`, whose edge's vertices are `points[hop.a]`, `points[hop.b]`.
+    /// The terms of `hop`, whose edge's vertices are `points[hop.a()]`, `points[hop.b()]`.
     pub fn of(hop: &Hop, points: &[Point]) -> Terms {
         let q = |i: usize| points.get(i).copied().unwrap_or_default().to_query();
-        let a = q(hop.a);
-        let e = diff(q(hop.b), a);
+        let a = q(hop.a());
+        let e = diff(q(hop.b()), a);
         let axis = e.0 == 0 || e.1 == 0;
         let e1 = if axis {
             (e.0.signum(), e.1.signum())
@@ -435,8 +435,8 @@ mod tests {
                 points.extend([a, b]);
                 let hop = Hop {
                     prev: eye,
-                    a: points.len() - 2,
-                    b: points.len() - 1,
+                    a: points.len() as u32 - 2,
+                    b: points.len() as u32 - 1,
                     next,
                     level: 0,
                 };
