@@ -134,6 +134,9 @@ pub struct QueryPoint {
 }
 
 impl QueryPoint {
+    /// The origin (a `const` [`Default`]).
+    pub(crate) const ORIGIN: QueryPoint = QueryPoint { x: 0, y: 0 };
+
     /// A query point from raw coordinates (units of 2⁻³²); `None` if outside the range.
     pub const fn from_raw(x: i64, y: i64) -> Option<QueryPoint> {
         if x.unsigned_abs() > QUERY_MAX_ABS_RAW as u64

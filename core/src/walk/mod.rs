@@ -668,6 +668,14 @@ impl<const K: usize> Walker<K> {
         self.cur
     }
 
+    /// The angle and cylinder of the last step taken, as its [`Step`] has them (θ = 2π
+    /// clockwise is [`Angle::ZERO`] there and here): a ray tree's look-ahead keeps the rest
+    /// of the step, not these again.
+    #[inline(always)]
+    pub(crate) fn last_step(&self) -> (Angle, CylinderId) {
+        (self.theta.angle, self.cur)
+    }
+
     /// The lap of the last event (or 0 at the start): how often the walk crossed the
     /// permanent wall θ = 0.
     pub(crate) fn lap(&self) -> u8 {

@@ -231,11 +231,11 @@ impl Dir {
 struct Boundary {
     /// The number of hops up to the stage where the boundary arises: a prefix of the
     /// stack of hops that stays in place until the boundary is resolved (a byte, as in
-    /// [`Level`]).
+    /// [`Level`]). The eye of that stage is the last of these hops' ([`Boundary::eye`]),
+    /// not kept here (16 bytes; a frame holds a boundary).
     stage: u8,
-    /// The eye of that stage and the direction of the boundary from it (exact: the
-    /// direction of a walk event or a range end from that eye).
-    eye: QueryPoint,
+    /// The direction of the boundary from the stage's eye (exact: the direction of a walk
+    /// event or a range end from that eye).
     angle: Angle,
     /// Branch index of the object hit by that stage.
     level: u8,
@@ -247,6 +247,15 @@ struct Boundary {
 }
 
 impl Boundary {
+    /// The eye of the boundary's stage, from the primary eye `q` and the stack of hops it
+    /// lies on.
+    fn eye(&self, q: QueryPoint, hops: &[Hop]) -> QueryPoint {
+        match usize::from(self.stage).checked_sub(1) {
+            Some(i) => hops.get(i).map_or(q, |h| h.next),
+            None => q,
+        }
+    }
+
     /// The exact primary angle, for a boundary of the primary stage.
     fn exact(&self) -> Option<Angle> {
         (self.stage == 0).then_some(self.angle)
@@ -286,7 +295,6 @@ impl Piece {
             ceiling: None,
             boundary: Boundary {
                 stage: 0,
-                eye: QueryPoint::default(),
                 angle: Angle::ZERO,
                 level: 0,
                 fallback: 0,
@@ -369,6 +377,9 @@ const MAX_HOPS: usize = 2 * MAX_TREE_DEPTH;
 /// top frame.
 struct Stacks<F: Frames> {
     frames: FrameStacks<F>,
+    /// The primary eye. A frame's eye is not kept in it: it is the eye after the last hop
+    /// on the stack while the frame is on top ([`Stacks::eye`]).
+    eye: QueryPoint,
     hops: F::Hops,
     branch: Branch,
     /// The exact directions of the range ends mapped through the hops, one [`ExactPair`]
@@ -420,6 +431,7 @@ impl<F: Frames> Stacks<F> {
     const fn new(walks: F::Walks, splits: F::Splits, hops: F::Hops, exacts: F::Exacts) -> Self {
         Stacks {
             frames: FrameStacks { walks, splits },
+            eye: QueryPoint::ORIGIN,
             hops,
             branch: heapless::Vec::new(),
             exacts,
@@ -429,6 +441,14 @@ impl<F: Frames> Stacks<F> {
             edges: [None; EDGE_HINTS],
             held: (0, 0),
         }
+    }
+
+    /// The eye of the top frame (or of the frame that just left it with its last piece,
+    /// which leaves the hops as they are): hops are pushed right before the frame that
+    /// owns them and popped with it, so the last one led to that frame's eye.
+    #[inline(always)]
+    fn eye(&self) -> QueryPoint {
+        self.hops.last().map_or(self.eye, |h| h.next)
     }
 
     /// The lengths of the hop and branch stacks: where a boundary arises (its stage and
@@ -488,8 +508,9 @@ impl<F: Frames> Stacks<F> {
         );
     }
 
-    /// Empties the stacks for a new tree.
-    fn clear(&mut self) {
+    /// Empties the stacks for a new tree from the primary eye `eye`.
+    fn clear(&mut self, eye: QueryPoint) {
+        self.eye = eye;
         self.frames.walks.clear();
         self.frames.splits.clear();
         self.held = (0, 0);
@@ -811,7 +832,8 @@ enum Frame {
     Walk(RangeWalk),
 }
 
-/// What every frame shares: its eye, the depth left to its pieces, its walking direction
+/// What every frame shares (its eye is [`Stacks::eye`] while it is on top): the depth left
+/// to its pieces, its walking direction
 /// (counter-clockwise primary directions map to `ccw` ones from its eye), the lengths of
 /// the hop and branch stacks to restore when it is popped and the places it holds.
 #[cfg_attr(
@@ -820,7 +842,6 @@ enum Frame {
 )]
 #[derive(Clone, Copy)]
 struct Level {
-    eye: QueryPoint,
     /// At most `MAX_TREE_DEPTH + 1` ([`Tree::primary_walk`]); the stack lengths below are
     /// at most `2·MAX_TREE_DEPTH` hops and entries and `MAX_TREE_DEPTH + 1` objects
     /// ([`Level::marks`]): bytes, as a tree keeps a level per frame.
@@ -897,10 +918,11 @@ struct PrimaryWalk {
 }
 
 impl PrimaryWalk {
-    /// What the walker follows: the eye, round past θ = 0 once more to reach `t`.
-    fn trace(&self) -> Trace {
+    /// What the walker follows: the primary eye `q` (the stacks', [`Stacks::eye`]), round
+    /// past θ = 0 once more to reach `t`.
+    fn trace(&self, q: QueryPoint) -> Trace {
         Trace::new(
-            self.level.eye,
+            q,
             Anchor::Point,
             Some(Position {
                 lap: 2,
@@ -1006,38 +1028,40 @@ struct Events {
     failed: bool,
 }
 
-/// The step [`Events`] looked ahead to, with its lap: a step that counts, so with a
-/// vertex, kept as a `u32` (40 bytes, not a `Step`'s 56 with the lap: a tree keeps one per
-/// frame).
+/// The step [`Events`] looked ahead to: the walker's last step, whose angle, cylinder and
+/// lap the walker still holds (it takes no other until the step is read), so only the rest
+/// is kept — 8 bytes, not a `Step`'s 56 with the lap: a tree keeps one per frame.
 #[derive(Clone, Copy)]
 struct Peeked {
-    angle: Angle,
+    /// The step's vertex: a step that counts has one, kept as a `u32`.
     vertex: u32,
-    cylinder: CylinderId,
     ahead: bool,
-    lap: u8,
+    /// The step lies exactly at θ = 0 and the perturbation puts it just below 2π: its lap
+    /// is the walker's plus one.
+    wraps: bool,
 }
 
 impl Peeked {
     /// `None` for a step without a vertex or with one past `u32` (never: a scene has at
     /// most `MAX_VERTICES`).
-    fn of(s: &Step, lap: u8) -> Option<Peeked> {
+    fn of(s: &Step, wraps: bool) -> Option<Peeked> {
         Some(Peeked {
-            angle: s.angle,
             vertex: u32::try_from(s.vertex?).ok()?,
-            cylinder: s.cylinder,
             ahead: s.ahead,
-            lap,
+            wraps,
         })
     }
 
-    fn step(&self) -> Step {
-        Step {
-            angle: self.angle,
+    /// The step and its lap, with what `walker` (which took it last) holds of it.
+    fn step(&self, walker: &Walker) -> (Step, u8) {
+        let (angle, cylinder) = walker.last_step();
+        let step = Step {
+            angle,
             vertex: Some(self.vertex as usize),
             ahead: self.ahead,
-            cylinder: self.cylinder,
-        }
+            cylinder,
+        };
+        (step, walker.lap() + u8::from(self.wraps))
     }
 }
 
@@ -1076,8 +1100,9 @@ impl Events {
         }
     }
 
-    /// The next step that counts from the walker (not `peek`), with its exact lap: a step
-    /// exactly at θ = 0 that the perturbation puts just below 2π belongs to the next lap.
+    /// The next step that counts from the walker (not `peek`), and whether it belongs to
+    /// the lap after the walker's: a step exactly at θ = 0 that the perturbation puts just
+    /// below 2π.
     /// Inlined into [`Events::next_cluster`]'s one call.
     #[inline(always)]
     fn step<S: Storage>(
@@ -1085,7 +1110,7 @@ impl Events {
         complex: &Complex<S>,
         scene: &SceneRef<'_>,
         t: &Trace,
-    ) -> Option<(Step, u8)> {
+    ) -> Option<(Step, bool)> {
         while !self.over {
             let s = match self.walker.next_step(complex, scene, t) {
                 Ok(Some(s)) => s,
@@ -1099,8 +1124,7 @@ impl Events {
                 // `wraps` is a call: made only for a step exactly at θ = 0 (−0.1 %
                 // instructions in the hall frame).
                 let at_zero = s.angle.is_exactly_zero() && wraps(&s.angle);
-                let lap = self.walker.lap() + u8::from(at_zero);
-                return Some((s, lap));
+                return Some((s, at_zero));
             }
         }
         None
@@ -1141,11 +1165,11 @@ impl Events {
         // `step`, whose walker costs more than the step it returns.
         let mut open = match self.peek.take() {
             Some(p) => {
-                let first = p.step();
+                let (first, lap) = p.step(&self.walker);
                 *out = Cluster {
                     first,
                     last: first,
-                    lap: p.lap,
+                    lap,
                 };
                 true
             }
@@ -1153,7 +1177,8 @@ impl Events {
         };
         // One call of `step`, inlined: the walker once, without a call per step (−1.2 %
         // instructions in the hall frame).
-        while let Some((s, l)) = self.step(complex, scene, t) {
+        while let Some((s, at_zero)) = self.step(complex, scene, t) {
+            let l = self.walker.lap() + u8::from(at_zero);
             if !open {
                 *out = Cluster {
                     first: s,
@@ -1164,7 +1189,7 @@ impl Events {
             } else if l == out.lap && s.angle.cmp_exact(&out.first.angle) == Ordering::Equal {
                 out.last = s;
             } else {
-                self.peek = Peeked::of(&s, l);
+                self.peek = Peeked::of(&s, at_zero);
                 // A step it cannot keep (never) fails the walk rather than drop it.
                 self.failed |= self.peek.is_none();
                 self.over |= self.peek.is_none();
@@ -1256,9 +1281,9 @@ pub fn ray_tree<S: Storage>(
         // last interval, which ends there (the primary stage: no hops).
         Some(i) => {
             if let Some(b) = first {
-                let rule = tree.event_boundary((0, 0), q, &b);
+                let rule = tree.event_boundary((0, 0), &b);
                 i.exact_start = Some(b.angle);
-                i.start_vertex = tree.resolve(&[], &rule, &left, &i.branch);
+                i.start_vertex = tree.resolve((q, &[]), &rule, &left, &i.branch);
             }
         }
         None => {}
@@ -1408,7 +1433,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
 ) -> Result<(), WalkError> {
     let tree = Tree { complex, scene };
     let (f, t) = (Angle::constant(from), Angle::constant(to));
-    scratch.clear();
+    scratch.clear(q);
     #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
     {
         scratch.floors = [None; FLOOR_HINTS];
@@ -1429,7 +1454,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     if context && tree.any_vertex_on_ray(q, &f) {
         em.left_of_f = tree.left_of(scratch, q, start, depth, f)?;
     }
-    let primary = tree.primary_walk(q, tree.primary_start(q, start, &f), depth, f, t, false);
+    let primary = tree.primary_walk(tree.primary_start(q, start, &f), depth, f, t, false);
     scratch.push(primary.level, Frame::Primary(primary))?;
     tree.drive(scratch, &mut em, &mut Piece::empty())?;
     em.finish();
@@ -1442,7 +1467,6 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// unwrapped circle either way.
     fn primary_walk(
         &self,
-        q: QueryPoint,
         (start, theta): (CylinderId, Angle),
         depth: usize,
         f: Angle,
@@ -1455,7 +1479,6 @@ impl<S: Storage> Tree<'_, '_, S> {
         let depth = u8::try_from(depth.min(MAX_TREE_DEPTH + 1)).unwrap_or(u8::MAX);
         PrimaryWalk {
             level: Level {
-                eye: q,
                 depth,
                 ccw: true,
                 hops: 0,
@@ -1472,7 +1495,6 @@ impl<S: Storage> Tree<'_, '_, S> {
             cur_from: Dir::at(f),
             cur_boundary: Boundary {
                 stage: 0,
-                eye: q,
                 angle: f,
                 level: 0,
                 fallback: 0,
@@ -1489,10 +1511,10 @@ impl<S: Storage> Tree<'_, '_, S> {
     #[cfg(feature = "alloc")]
     fn first_boundary(&self, q: QueryPoint, start: CylinderId) -> Result<Option<Dir>, WalkError> {
         let zero = Angle::ZERO;
-        let mut walk = self.primary_walk(q, (start, zero), 0, zero, zero, false);
+        let mut walk = self.primary_walk((start, zero), 0, zero, zero, false);
         let mut seen = self.complex.ceiling(start);
         let c = &mut Cluster::empty();
-        let trace = walk.trace();
+        let trace = walk.trace(q);
         while walk.events.cluster(self.complex, self.scene, &trace, c)? {
             // Round once (lap 1 holds the events at θ = 0 that end the first lap).
             if c.lap > 1 || (c.lap == 1 && c.first.angle.cmp_exact(&zero) != Ordering::Equal) {
@@ -1518,11 +1540,11 @@ impl<S: Storage> Tree<'_, '_, S> {
         depth: usize,
         f: Angle,
     ) -> Result<Option<Branch>, WalkError> {
-        let mut walk = self.primary_walk(q, (start, Angle::ZERO), depth, f, f, true);
+        let mut walk = self.primary_walk((start, Angle::ZERO), depth, f, f, true);
         let mut last = Piece::empty();
         let mut any = false;
         let c = &mut Cluster::empty();
-        while walk.next_piece(self, &mut last, c)? {
+        while walk.next_piece(self, q, &mut last, c)? {
             any = true;
         }
         if !any {
@@ -1566,6 +1588,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut fresh = false;
         loop {
             let (stage, level_len) = sc.lengths()?;
+            let eye = sc.eye();
             let Some(top) = sc.frames.top() else {
                 return Ok(());
             };
@@ -1574,7 +1597,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             match top {
                 Top::Walk(Frame::Primary(w)) => {
                     let level = w.level;
-                    fresh = if w.next_piece(self, piece, &mut cluster)? {
+                    fresh = if w.next_piece(self, eye, piece, &mut cluster)? {
                         self.resolve_piece(sc, level, piece, em, false)?
                     } else {
                         sc.pop(level);
@@ -1584,7 +1607,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
                 Top::Walk(Frame::Walk(w)) => {
                     let level = w.level;
-                    let (c, at) = (&mut cluster, (stage, level_len));
+                    let (c, at) = (&mut cluster, (eye, stage, level_len));
                     fresh = if w.next_piece(
                         self,
                         Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
@@ -1606,7 +1629,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                 #[cfg(any(feature = "mirrors", feature = "refraction"))]
                 Top::Split(s) => {
                     let (level, m, kind) = (s.level, s.cut.m, s.cut.kind);
-                    let at = (stage, level_len);
+                    let at = (eye, stage, level_len);
                     fresh = match s.next_edge(
                         self,
                         Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
@@ -1653,7 +1676,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         left: bool,
     ) -> Result<bool, WalkError> {
         let Some(c) = p.ceiling else {
-            em.leaf(self, &sc.hops, &sc.branch, &p.boundary)?;
+            em.leaf(self, (sc.eye, &sc.hops), &sc.branch, &p.boundary)?;
             if left {
                 sc.restore(level);
             }
@@ -1686,7 +1709,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }),
             _ => {
                 sc.branch.push(c).map_err(|_| WalkError::TreeTooDeep)?;
-                em.leaf(self, &sc.hops, &sc.branch, &p.boundary)?;
+                em.leaf(self, (sc.eye, &sc.hops), &sc.branch, &p.boundary)?;
                 sc.branch.pop();
                 if left {
                     sc.restore(level);
@@ -1697,10 +1720,9 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The boundary made by a walk event at the given stage (hops) and level (branch index).
-    fn event_boundary(&self, (stage, level): (u8, u8), eye: QueryPoint, d: &Dir) -> Boundary {
+    fn event_boundary(&self, (stage, level): (u8, u8), d: &Dir) -> Boundary {
         Boundary {
             stage,
-            eye,
             angle: d.angle,
             level,
             fallback: d.index,
@@ -1710,19 +1732,21 @@ impl<S: Storage> Tree<'_, '_, S> {
 }
 
 impl PrimaryWalk {
-    /// The next piece inside the range, in counter-clockwise order from `f`, written to
-    /// `out`; `false` (and `out` untouched) when there is none. `c`: room for a cluster.
+    /// The next piece inside the range, in counter-clockwise order from `f`, seen from the
+    /// primary eye `q`, written to `out`; `false` (and `out` untouched) when there is none.
+    /// `c`: room for a cluster.
     fn next_piece<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
+        q: QueryPoint,
         out: &mut Piece,
         c: &mut Cluster,
     ) -> Result<bool, WalkError> {
         if self.done {
             return Ok(false);
         }
-        let (q, f) = (self.level.eye, self.f);
-        let trace = self.trace();
+        let f = self.f;
+        let trace = self.trace(q);
         loop {
             // The walk ends past `t` (on lap 2): `t` closes the last piece.
             if !self.events.cluster(tree.complex, tree.scene, &trace, c)? {
@@ -1748,7 +1772,7 @@ impl PrimaryWalk {
                 Ordering::Equal => {
                     if after != self.seen {
                         self.cur_from = Dir::of(&c.last);
-                        self.cur_boundary = tree.event_boundary((0, 0), q, &Dir::of(&c.first));
+                        self.cur_boundary = tree.event_boundary((0, 0), &Dir::of(&c.first));
                     }
                     self.seen = after;
                     continue;
@@ -1778,7 +1802,7 @@ impl PrimaryWalk {
                 out.ceiling = self.seen;
                 out.boundary = core::mem::replace(
                     &mut self.cur_boundary,
-                    tree.event_boundary((0, 0), q, &out.to),
+                    tree.event_boundary((0, 0), &out.to),
                 );
                 self.seen = after;
                 return Ok(true);
@@ -1792,7 +1816,7 @@ impl<K: FnMut(Interval<'_>)> Emitter<'_, K> {
     fn leaf<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
-        hops: &[Hop],
+        hops: (QueryPoint, &[Hop]),
         branch: &[ObjectId],
         boundary: &Boundary,
     ) -> Result<(), WalkError> {
@@ -1884,11 +1908,12 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The primary angle (radians, `f64`) of a boundary: its direction intersected with
-    /// each hop's edge line, continued from the previous eye.
-    fn radians(&self, hops: &[Hop], rule: &Boundary) -> f64 {
+    /// each hop's edge line, continued from the previous eye (`q`, the primary eye, and
+    /// the stack of hops).
+    fn radians(&self, (q, hops): (QueryPoint, &[Hop]), rule: &Boundary) -> f64 {
         let d = self.map_dir(
             hops.get(..rule.stage.into()).unwrap_or(hops),
-            rule.eye,
+            rule.eye(q, hops),
             rule.dir(),
         );
         let a = libm::atan2(d.1, d.0);
@@ -1932,20 +1957,21 @@ impl<S: Storage> Tree<'_, '_, S> {
         d
     }
 
-    /// The vertex of the boundary of `rule` between the branches `left` and `right`; `hops`
-    /// is the stack of hops, of which the rule's stage is a prefix. Out of line: its
+    /// The vertex of the boundary of `rule` between the branches `left` and `right`; `q` is
+    /// the primary eye and `hops` the stack of hops, of which the rule's stage is a prefix. Out of line: its
     /// 1024-bit tables (3.4 KiB) would otherwise take stack in every caller, even in the
     /// walks that resolve no vertex (frames).
     #[inline(never)]
     fn resolve(
         &self,
-        hops: &[Hop],
+        (q, hops): (QueryPoint, &[Hop]),
         rule: &Boundary,
         left: &[ObjectId],
         right: &[ObjectId],
     ) -> Option<usize> {
         let all = hops;
         let hops = hops.get(..rule.stage.into())?;
+        let rule_eye = rule.eye(q, hops);
         let stages = hops.len();
         // The boundary direction at every earlier stage modulo P, mapped back hop by hop
         // once: most stages hold no candidate vertex on the ray, which different residues
@@ -1954,7 +1980,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let dir = rule.dir();
         let mut r = Some((residue_i128(dir.0), residue_i128(dir.1)));
         for st in (0..stages).rev() {
-            let cur = hops.get(st + 1).map_or(rule.eye, |h| h.prev);
+            let cur = hops.get(st + 1).map_or(rule_eye, |h| h.prev);
             r = r.and_then(|r| self.map_hop_residue(hops.get(st)?, cur, r));
             if let Some(slot) = residues.get_mut(st) {
                 *slot = r;
@@ -1963,7 +1989,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut mapped: Option<[Option<(Wide, Wide)>; MAX_STAGES]> = None;
         for st in 0..=stages {
             let (eye, level, origin) = match st.checked_sub(1).and_then(|i| hops.get(i)) {
-                None => (hops.first().map_or(rule.eye, |h| h.prev), 0, None),
+                None => (hops.first().map_or(rule_eye, |h| h.prev), 0, None),
                 Some(h) => (h.next, h.level(), Some((h.a(), h.b()))),
             };
             let level = if st == stages {
@@ -1995,12 +2021,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                     continue;
                 }
             }
-            let mapped = mapped.get_or_insert_with(|| self.map_exact(hops, rule));
+            let mapped = mapped.get_or_insert_with(|| self.map_exact(hops, rule_eye, rule));
             let best = match mapped.get(st).and_then(Option::as_ref) {
                 Some(d) => self.nearest_on_exact_ray(candidates, eye, d),
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
-                    let d = self.map_dir(later, rule.eye, rule.dir());
+                    let d = self.map_dir(later, rule_eye, rule.dir());
                     nearest_on_ray(candidates, |v| {
                         let w = diff(self.qpoint(v), eye);
                         let wf = (to_f64(w.0), to_f64(w.1));
@@ -2017,14 +2043,20 @@ impl<S: Storage> Tree<'_, '_, S> {
         rule.fallback().map(|v| v as usize)
     }
 
-    /// The boundary direction of `rule` at every stage before the last, mapped back hop by
-    /// hop exactly ([`Tree::map_hop_exact`]); `None` past `Wide`'s budget.
-    fn map_exact(&self, hops: &[Hop], rule: &Boundary) -> [Option<(Wide, Wide)>; MAX_STAGES] {
+    /// The boundary direction of `rule` (from `eye`, after `hops`) at every stage before
+    /// the last, mapped back hop by hop exactly ([`Tree::map_hop_exact`]); `None` past
+    /// `Wide`'s budget.
+    fn map_exact(
+        &self,
+        hops: &[Hop],
+        eye: QueryPoint,
+        rule: &Boundary,
+    ) -> [Option<(Wide, Wide)>; MAX_STAGES] {
         let mut mapped = [None; MAX_STAGES];
         let (x, y) = rule.dir();
         let mut d = Some((Wide::from_i128(x), Wide::from_i128(y)));
         for st in (0..hops.len()).rev() {
-            let cur = hops.get(st + 1).map_or(rule.eye, |h| h.prev);
+            let cur = hops.get(st + 1).map_or(eye, |h| h.prev);
             d = d.and_then(|d| self.map_hop_exact(hops.get(st)?, cur, &d));
             if let Some(slot) = mapped.get_mut(st) {
                 *slot = d;
@@ -2863,7 +2895,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         first: &Boundary,
         hint: bool,
     ) -> Result<(), WalkError> {
-        let eye = level.eye;
+        let eye = sc.eye();
         let (start, walk) = if from.angle.cmp_exact(&to.angle) == Ordering::Equal {
             // Both ends placed on one direction (`map_range`): the range is thinner than
             // `f64` resolves and lies on one side of it, the side where the line meets
@@ -2925,8 +2957,9 @@ impl<S: Storage> Tree<'_, '_, S> {
 
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl RangeWalk {
-    /// The next piece of the range in walk order; `stage` and `level` are the lengths of the
-    /// hop and branch stacks above this frame (its boundaries' stage and level). `fresh`:
+    /// The next piece of the range in walk order; `eye` is the frame's ([`Stacks::eye`]),
+    /// `stage` and `level` are the lengths of the hop and branch stacks above this frame
+    /// (its boundaries' stage and level). `fresh`:
     /// `out` holds the range and first boundary the walk was pushed with: the first piece
     /// does not write the start, end and boundary it shares with them (an event on the
     /// opening ray, which moves the start, writes it there). `c`: room for a cluster.
@@ -2934,14 +2967,14 @@ impl RangeWalk {
         &mut self,
         tree: &Tree<'_, '_, S>,
         ends: Ends<'_>,
-        (stage, level): (u8, u8),
+        (eye, stage, level): (QueryPoint, u8, u8),
         (out, fresh): (&mut Piece, bool),
         c: &mut Cluster,
     ) -> Result<bool, WalkError> {
         if self.done {
             return Ok(false);
         }
-        let (eye, ccw) = (self.level.eye, self.level.ccw);
+        let ccw = self.level.ccw;
         let mut end = None;
         let trace = Trace::new(
             eye,
@@ -2993,7 +3026,7 @@ impl RangeWalk {
                     let from = core::mem::replace(&mut self.cur_from, Dir::of(&c.last));
                     out.to = Dir::of(&c.first);
                     out.ceiling = self.seen;
-                    let next = tree.event_boundary((stage, level), eye, &out.to);
+                    let next = tree.event_boundary((stage, level), &out.to);
                     if fresh {
                         self.cur_boundary = next;
                     } else {
@@ -3220,11 +3253,11 @@ impl<S: Storage> Tree<'_, '_, S> {
             done: false,
         };
         let (stage, index) = sc.lengths()?;
-        let ends = (&p.from, &p.to);
+        let (eye, ends) = (sc.eye(), (&p.from, &p.to));
         let Some(e) = cut.next(
             self,
             Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
-            (level.eye, level.ccw),
+            (eye, level.ccw),
             ends,
         ) else {
             sc.restore(level);
@@ -3249,7 +3282,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             )?;
         }
         // `p` is the range: the ends and boundary the piece shares with it are there.
-        self.write_edge_piece((level.eye, stage, index), &e, p, None);
+        self.write_edge_piece((eye, stage, index), &e, p, None);
         self.change_eye(sc, level, m, kind, p, e.edge, left)?;
         Ok(true)
     }
@@ -3271,7 +3304,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         (ia, ib): (usize, usize),
         left: bool,
     ) -> Result<(), WalkError> {
-        let eye = level.eye;
+        let eye = sc.eye();
         let index = sc.branch.len();
         let (a, b) = (self.point(ia), self.point(ib));
         let (eye2, flip, hop_level) = match kind {
@@ -3299,7 +3332,6 @@ impl<S: Storage> Tree<'_, '_, S> {
             level: u8::try_from(hop_level).map_err(|_| WalkError::TreeTooDeep)?,
         };
         let turned = Level {
-            eye: eye2,
             ccw: level.ccw != flip,
             ..level
         };
@@ -3476,17 +3508,17 @@ impl SplitKind {
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl Split {
     /// The next edge piece in the frame's direction: its edge, with its range in walk order
-    /// and its first boundary written to `out` (its ceiling is left as it is); `stage` and
-    /// `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the split's range
+    /// and its first boundary written to `out` (its ceiling is left as it is); `eye`,
+    /// `stage` and `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the split's range
     /// and first boundary (the split was just pushed with them).
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         ends: Ends<'_>,
-        (stage, level): (u8, u8),
+        (eye, stage, level): (QueryPoint, u8, u8),
         (out, fresh): (&mut Piece, bool),
     ) -> Option<(usize, usize)> {
-        let (eye, ccw) = (self.level.eye, self.level.ccw);
+        let ccw = self.level.ccw;
         let e = self
             .cut
             .next(tree, ends, (eye, ccw), (&self.from, &self.to))?;
@@ -3651,7 +3683,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             // The hit (or exit) edge changes at vertex `v`.
             (Some(v), _) => {
                 out.from = self.toward(eye, v);
-                out.boundary = self.event_boundary((stage, level), eye, &out.from);
+                out.boundary = self.event_boundary((stage, level), &out.from);
             }
             (None, Some((from, _, first))) => {
                 out.from = from.clone();
@@ -4442,14 +4474,12 @@ mod tests {
                 {
                     let first = Boundary {
                         stage: 0,
-                        eye: q,
                         angle: from.angle,
                         level: 0,
                         fallback: h as u32,
                         falls_back: true,
                     };
                     let level = Level {
-                        eye: q,
                         depth: 1,
                         ccw,
                         hops: 0,
@@ -4461,6 +4491,7 @@ mod tests {
                     for m in (0..s.len() as u32).map(ObjectId) {
                         let run = |fresh: bool| {
                             let mut sc = Stacks::growing();
+                            sc.eye = q;
                             tree.push_range_walk(&mut sc, level, m, (&from, &to), &first, false)
                                 .ok()?;
                             let mut out = Piece::empty();
@@ -4474,7 +4505,7 @@ mod tests {
                                 return None;
                             };
                             while w
-                                .next_piece(&tree, mapped, (0, 0), (&mut out, fresh), &mut c)
+                                .next_piece(&tree, mapped, (q, 0, 0), (&mut out, fresh), &mut c)
                                 .ok()?
                             {
                                 fresh = false;
