@@ -598,18 +598,28 @@ pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     lap: u8,
     /// The tangent vertex of the last event, if it crossed a chain: never an exit of the
     /// cylinder entered, so its angle is not computed (see [`Walker::chain_exit_ccw`]).
-    /// A `u32` (a scene has at most `MAX_VERTICES`; `None` otherwise, which only costs
-    /// that angle): a ray tree keeps a walker per frame.
-    last: Option<u32>,
+    /// Kept as the vertex plus one in a `NonZeroU32` (4 bytes; a scene has at most
+    /// `MAX_VERTICES`; `None` otherwise, which only costs that angle): a ray tree keeps a
+    /// walker per frame ([`Walker::just_crossed`]).
+    last: Option<core::num::NonZeroU32>,
     /// The tangents from `q` to recent chain objects: consecutive cylinders of a trace
     /// mostly share a chain, a walk comes back to the objects near the eye all around the
     /// circle, and the tangents depend only on the object.
     cache: [CachedTangents; K],
     /// Events taken so far; a walk takes at most `8 · cylinders + 8`: a lap enters each
     /// cylinder a bounded number of times, and a range walk of a ray tree goes round at
-    /// most twice (more means the complex is inconsistent).
-    steps: usize,
+    /// most twice (more means the complex is inconsistent). A `u32` (a ray tree keeps a
+    /// walker per frame): at `u32::MAX` the walk fails as well.
+    steps: u32,
     ccw: bool,
+}
+
+/// [`Walker::last`] for the tangent vertex `v` of a chain crossing.
+#[inline(always)]
+fn crossed(v: usize) -> Option<core::num::NonZeroU32> {
+    u32::try_from(v.checked_add(1)?)
+        .ok()
+        .and_then(core::num::NonZeroU32::new)
 }
 
 /// Whether the clockwise position `a` comes strictly before `b` (`None`: θ = 2π, the first
@@ -676,6 +686,12 @@ impl<const K: usize> Walker<K> {
         (self.theta.angle, self.cur)
     }
 
+    /// Whether `h` is the tangent vertex of the chain the last event crossed.
+    #[inline(always)]
+    fn just_crossed(&self, h: usize) -> bool {
+        self.last.is_some_and(|l| l.get() as usize == h + 1)
+    }
+
     /// The lap of the last event (or 0 at the start): how often the walk crossed the
     /// permanent wall θ = 0.
     pub(crate) fn lap(&self) -> u8 {
@@ -711,7 +727,7 @@ impl<const K: usize> Walker<K> {
     ) -> Result<Option<Step>, WalkError> {
         // Bounded by the events taken: a walk that ended (or failed) stays so, as the
         // state does not change.
-        if self.steps >= 8 * complex.cylinders().len() + 8 {
+        if self.steps == u32::MAX || self.steps as usize >= 8 * complex.cylinders().len() + 8 {
             return Err(WalkError::Corrupt);
         }
         let r = if CCW {
@@ -831,7 +847,7 @@ impl<const K: usize> Walker<K> {
             Some(e) => self.cross(complex, scene, t.anchor, c, e, &angle)?,
         };
         self.theta = angle;
-        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
+        self.last = exit.and_then(|e| crossed(e.vertex));
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
@@ -897,7 +913,7 @@ impl<const K: usize> Walker<K> {
         }
         let h = arc as usize;
         // The vertex just crossed is no exit (see `chain_exit_ccw`).
-        if self.last.is_some_and(|l| l as usize == h) {
+        if self.just_crossed(h) {
             return Some(());
         }
         let ahead = exits_through(side, true);
@@ -942,7 +958,7 @@ impl<const K: usize> Walker<K> {
         };
         // The vertex just crossed: the line from the eye through it is the one at θ, or (an
         // arc vertex, tangent over less than half a turn) its reverse at θ + π.
-        if self.last.is_some_and(|l| l as usize == h) {
+        if self.just_crossed(h) {
             return;
         }
         let a = tangent_angle(scene, t.q, h, ahead).keyed();
@@ -985,7 +1001,7 @@ impl<const K: usize> Walker<K> {
             return;
         };
         // The vertex just crossed, as counter-clockwise (θ − π for an arc vertex's reverse).
-        if self.last.is_some_and(|l| l as usize == h) {
+        if self.just_crossed(h) {
             return;
         }
         let (a, ahead) = tangent_event(scene, t.q, h, bound, chain);
@@ -1047,7 +1063,7 @@ impl<const K: usize> Walker<K> {
         self.full = angle.is_none();
         let at = angle.map_or(Angle::ZERO, |a| a.angle);
         self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
-        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
+        self.last = exit.and_then(|e| crossed(e.vertex));
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(at, exit, next)))

@@ -305,30 +305,55 @@ impl Piece {
 }
 
 /// One change of eye: a ray from `prev` hits the line of the edge `a → b` (global vertex
-/// indices) and continues on a line through `next`.
-/// 48 bytes: the vertex indices fit `u32`s (at most [`crate::scene::MAX_VERTICES`]) and the
-/// branch index a byte (at most `MAX_TREE_DEPTH + 1`), both checked where a hop is made.
+/// indices) and continues on a line through `next`; the stage starting at it hits the
+/// object at its branch index (its level).
+/// 40 bytes: a vertex index is below [`crate::scene::MAX_VERTICES`] = 2²⁶, so `a` keeps
+/// the level (at most `MAX_TREE_DEPTH + 1` < 2⁶) in its top 6 bits, checked where a hop
+/// is made ([`Hop::new`]; a byte of its own would pad the hop to 48 bytes).
 #[derive(Clone, Copy, Debug)]
 struct Hop {
     prev: QueryPoint,
-    a: u32,
+    a_level: u32,
     b: u32,
     next: QueryPoint,
-    /// Branch index of the object hit by the stage starting at this hop.
-    level: u8,
 }
 
+/// Bits of a vertex index in [`Hop::a_level`].
+const HOP_VERTEX_BITS: u32 = 26;
+const _: () = assert!(crate::scene::MAX_VERTICES <= 1 << HOP_VERTEX_BITS);
+const _: () = assert!(MAX_TREE_DEPTH + 1 < 1 << (32 - HOP_VERTEX_BITS));
+
 impl Hop {
+    /// `None` if a vertex index is past [`crate::scene::MAX_VERTICES`] or the level past
+    /// what the top bits hold.
+    #[cfg_attr(
+        not(any(feature = "mirrors", feature = "refraction")),
+        allow(dead_code)
+    )]
+    fn new(prev: QueryPoint, (a, b): (usize, usize), next: QueryPoint, level: usize) -> Option<Hop> {
+        let fits = |v: usize| v < 1 << HOP_VERTEX_BITS;
+        if !fits(a) || !fits(b) || level >= 1 << (32 - HOP_VERTEX_BITS) {
+            return None;
+        }
+        Some(Hop {
+            prev,
+            a_level: (a | level << HOP_VERTEX_BITS) as u32,
+            b: b as u32,
+            next,
+        })
+    }
+
     fn a(&self) -> usize {
-        self.a as usize
+        (self.a_level & ((1 << HOP_VERTEX_BITS) - 1)) as usize
     }
 
     fn b(&self) -> usize {
         self.b as usize
     }
 
+    /// Branch index of the object hit by the stage starting at this hop.
     fn level(&self) -> usize {
-        self.level.into()
+        (self.a_level >> HOP_VERTEX_BITS) as usize
     }
 }
 
@@ -421,7 +446,7 @@ const FLOOR_HINTS: usize = 16;
 /// slots save no more). Only a hint ([`Cut::hint`]); emptied with the other stacks at
 /// every tree.
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
-type Edges = [Option<(ObjectId, u32)>; EDGE_HINTS];
+type Edges = [Option<(ObjectId, EdgeIndex)>; EDGE_HINTS];
 
 /// Slots of [`Edges`].
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
@@ -990,18 +1015,37 @@ enum Split {}
 struct Cut {
     m: ObjectId,
     kind: SplitKind,
-    /// The start direction (from the eye) and the edge (index in `m`) of the last edge
-    /// piece yielded. In `i64`s and a `u32` (48 bytes less than `i128`s and a `usize`; a
-    /// tree keeps a cut per split): the direction is an [`Angle`]'s or the difference of
-    /// two query points, each below 2⁵³ in magnitude, and an object's edges are at most
-    /// [`crate::scene::MAX_VERTICES`].
-    last: Option<u32>,
+    /// The start direction (from the eye) and the edge of the last edge piece yielded.
+    /// In `i64`s and an [`EdgeIndex`] (56 bytes less than `i128`s and an `Option<usize>`;
+    /// a tree keeps a cut per split): the direction is an [`Angle`]'s or the difference of
+    /// two query points, each below 2⁵³ in magnitude.
+    last: Option<EdgeIndex>,
     /// The start direction of the last piece, where `last` is some.
     last_start: (i64, i64),
-    /// An edge (index in `m`) to try first for the first piece: taken if its piece starts
-    /// at the start of the range (see [`Edges`]).
-    hint: Option<u32>,
+    /// An edge to try first for the first piece: taken if its piece starts at the start
+    /// of the range (see [`Edges`]).
+    hint: Option<EdgeIndex>,
     done: bool,
+}
+
+/// An edge of an object, its index in the object kept plus one in a `NonZeroU32`: 4 bytes
+/// as an `Option` (a tree keeps two per split and a table of them), where an `Option<u32>`
+/// takes 8. An object's edges are at most [`crate::scene::MAX_VERTICES`].
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct EdgeIndex(core::num::NonZeroU32);
+
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+impl EdgeIndex {
+    /// `None` past `u32::MAX − 1` (never for an object's edge).
+    fn new(k: usize) -> Option<EdgeIndex> {
+        let raw = u32::try_from(k).ok()?.checked_add(1)?;
+        core::num::NonZeroU32::new(raw).map(EdgeIndex)
+    }
+
+    fn get(self) -> usize {
+        (self.0.get() - 1) as usize
+    }
 }
 
 /// An edge piece of a split's range: the edge (global vertex indices in `m`'s order) and
@@ -3323,14 +3367,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         if s1 == Sign::Zero || (s1 == s0) == flip {
             return Err(WalkError::DegenerateOptics { level: index });
         }
-        let narrow = |v: usize| u32::try_from(v).map_err(|_| WalkError::Corrupt);
-        let hop = Hop {
-            prev: eye,
-            a: narrow(ia)?,
-            b: narrow(ib)?,
-            next: eye2,
-            level: u8::try_from(hop_level).map_err(|_| WalkError::TreeTooDeep)?,
-        };
+        // Vertex indices are below `MAX_VERTICES`, and levels bounded by the branch.
+        let hop = Hop::new(eye, (ia, ib), eye2, hop_level).ok_or(WalkError::TreeTooDeep)?;
         let turned = Level {
             ccw: level.ccw != flip,
             ..level
@@ -3594,7 +3632,7 @@ impl Cut {
         let next = self.last.and_then(|k| {
             let (l, k) = (
                 (i128::from(self.last_start.0), i128::from(self.last_start.1)),
-                k as usize,
+                k.get(),
             );
             let n = tree.scene.object(self.m).map_or(0, |o| o.len());
             let up = front != ccw;
@@ -3614,7 +3652,7 @@ impl Cut {
         // turns (a wrong guess costs time, not a wrong piece).
         let first = || {
             let tried = match self.hint {
-                Some(k) => tree.facing_edge(eye, self.m, front, k as usize),
+                Some(k) => tree.facing_edge(eye, self.m, front, k.get()),
                 None => {
                     tree.edge_toward(eye, self.m, front, if ccw { &lo.angle } else { &hi.angle })
                 }
@@ -3652,7 +3690,7 @@ impl Cut {
         };
         // Never `None` (see `last`), which would only end the split early.
         let last =
-            (i64::try_from(key.0).ok().zip(i64::try_from(key.1).ok())).zip(u32::try_from(k).ok());
+            (i64::try_from(key.0).ok().zip(i64::try_from(key.1).ok())).zip(EdgeIndex::new(k));
         self.done = last.is_none();
         if let Some((start, k)) = last {
             (self.last_start, self.last) = (start, Some(k));
@@ -4044,13 +4082,8 @@ mod tests {
                 .map(|_| {
                     let k = next(5).unsigned_abs() as usize % 4;
                     let q = |x: i64, y: i64| QueryPoint::from_raw(x << 20, y << 20).unwrap();
-                    Hop {
-                        prev: q(next(1000), next(1000)),
-                        a: 4 + k as u32,
-                        b: 4 + (k as u32 + 1) % 4,
-                        next: q(next(1000), next(1000)),
-                        level: 0,
-                    }
+                    let (prev, next) = (q(next(1000), next(1000)), q(next(1000), next(1000)));
+                    Hop::new(prev, (4 + k, 4 + (k + 1) % 4), next, 0).unwrap()
                 })
                 .collect();
             let eye = QueryPoint::from_raw(next(1 << 40), next(1 << 40)).unwrap();
@@ -4546,7 +4579,7 @@ mod tests {
     #[cfg(feature = "refraction")]
     #[test]
     fn split_pieces_do_not_depend_on_the_hint() {
-        use super::{cross, diff, ranked, Cut, Dir, Ends, SplitKind, Tree};
+        use super::{cross, diff, ranked, Cut, Dir, EdgeIndex, Ends, SplitKind, Tree};
         use crate::geom::predicates::Direction;
         use crate::geom::sos::Angle;
         let (s, c) = anchored();
@@ -4598,7 +4631,7 @@ mod tests {
                     let turn = cross(from.angle.vector(), to.angle.vector());
                     let ccw = turn > 0;
                     for kind in [SplitKind::Entry(eta), SplitKind::Exit(eta)] {
-                        let run = |hint: Option<u32>| {
+                        let run = |hint: Option<EdgeIndex>| {
                             let mut cut = Cut {
                                 m,
                                 kind,
@@ -4618,8 +4651,9 @@ mod tests {
                             }
                             out
                         };
-                        let scan = run(Some(o.len() as u32));
-                        for hint in (0..o.len() as u32).map(Some).chain([None, Some(u32::MAX)]) {
+                        let scan = run(EdgeIndex::new(o.len()));
+                        let far = EdgeIndex::new(u32::MAX as usize - 1);
+                        for hint in (0..o.len()).map(EdgeIndex::new).chain([None, far]) {
                             assert_eq!(run(hint), scan, "{q:?} {from:?} {to:?} {m:?} {hint:?}");
                         }
                         let start = if ccw { &from.angle } else { &to.angle };

@@ -433,13 +433,8 @@ mod tests {
                 }
                 let next = QueryPoint::from_raw(q(int(eb)), q(int(eb))).unwrap();
                 points.extend([a, b]);
-                let hop = Hop {
-                    prev: eye,
-                    a: points.len() as u32 - 2,
-                    b: points.len() as u32 - 1,
-                    next,
-                    level: 0,
-                };
+                let ends = (points.len() - 2, points.len() - 1);
+                let hop = Hop::new(eye, ends, next, 0).unwrap();
                 let t = Terms::of(&hop, &points);
                 let axis = t.e1.0 == 0 || t.e1.1 == 0;
                 let below = HopChain {
