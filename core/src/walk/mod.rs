@@ -591,35 +591,28 @@ impl Trace {
 pub(crate) struct Walker<const K: usize = TANGENT_CACHE> {
     /// The cylinder the walk is in.
     cur: CylinderId,
-    /// The angle of the last event (or the start); meaningless while `full`.
-    theta: KeyedAngle,
+    /// The angle of the last event (or the start); meaningless while `full`. Its
+    /// half-plane is `upper` ([`Walker::theta`]): a `KeyedAngle` here would pad the walker
+    /// by 8 bytes, and a ray tree keeps a walker per frame.
+    theta: Angle,
+    upper: bool,
     /// Clockwise only: θ is 2π (the walk just crossed the permanent wall).
     full: bool,
     lap: u8,
     /// The tangent vertex of the last event, if it crossed a chain: never an exit of the
     /// cylinder entered, so its angle is not computed (see [`Walker::chain_exit_ccw`]).
-    /// Kept as the vertex plus one in a `NonZeroU32` (4 bytes; a scene has at most
-    /// `MAX_VERTICES`; `None` otherwise, which only costs that angle): a ray tree keeps a
-    /// walker per frame ([`Walker::just_crossed`]).
-    last: Option<core::num::NonZeroU32>,
+    /// A `u32` (a scene has at most `MAX_VERTICES`; `None` otherwise, which only costs
+    /// that angle): a ray tree keeps a walker per frame.
+    last: Option<u32>,
     /// The tangents from `q` to recent chain objects: consecutive cylinders of a trace
     /// mostly share a chain, a walk comes back to the objects near the eye all around the
     /// circle, and the tangents depend only on the object.
     cache: [CachedTangents; K],
     /// Events taken so far; a walk takes at most `8 · cylinders + 8`: a lap enters each
     /// cylinder a bounded number of times, and a range walk of a ray tree goes round at
-    /// most twice (more means the complex is inconsistent). A `u32` (a ray tree keeps a
-    /// walker per frame): at `u32::MAX` the walk fails as well.
-    steps: u32,
+    /// most twice (more means the complex is inconsistent).
+    steps: usize,
     ccw: bool,
-}
-
-/// [`Walker::last`] for the tangent vertex `v` of a chain crossing.
-#[inline(always)]
-fn crossed(v: usize) -> Option<core::num::NonZeroU32> {
-    u32::try_from(v.checked_add(1)?)
-        .ok()
-        .and_then(core::num::NonZeroU32::new)
 }
 
 /// Whether the clockwise position `a` comes strictly before `b` (`None`: θ = 2π, the first
@@ -654,7 +647,8 @@ impl<const K: usize> Walker<K> {
         const { assert!(K >= 2 && K.is_multiple_of(2), "sets of two entries") };
         Walker {
             cur,
-            theta: from.keyed(),
+            theta: from,
+            upper: from.keyed().upper_half(),
             full: false,
             lap: 0,
             last: None,
@@ -683,13 +677,19 @@ impl<const K: usize> Walker<K> {
     /// of the step, not these again.
     #[inline(always)]
     pub(crate) fn last_step(&self) -> (Angle, CylinderId) {
-        (self.theta.angle, self.cur)
+        (self.theta, self.cur)
+    }
+
+    /// The angle of the last event with its half-plane.
+    #[inline(always)]
+    fn theta(&self) -> KeyedAngle {
+        KeyedAngle::from_parts(self.theta, self.upper)
     }
 
     /// Whether `h` is the tangent vertex of the chain the last event crossed.
     #[inline(always)]
     fn just_crossed(&self, h: usize) -> bool {
-        self.last.is_some_and(|l| l.get() as usize == h + 1)
+        self.last.is_some_and(|l| l as usize == h)
     }
 
     /// The lap of the last event (or 0 at the start): how often the walk crossed the
@@ -727,7 +727,7 @@ impl<const K: usize> Walker<K> {
     ) -> Result<Option<Step>, WalkError> {
         // Bounded by the events taken: a walk that ended (or failed) stays so, as the
         // state does not change.
-        if self.steps == u32::MAX || self.steps as usize >= 8 * complex.cylinders().len() + 8 {
+        if self.steps >= 8 * complex.cylinders().len() + 8 {
             return Err(WalkError::Corrupt);
         }
         let r = if CCW {
@@ -846,8 +846,8 @@ impl<const K: usize> Walker<K> {
             None => c.right_neighbour.ok_or(WalkError::Corrupt)?,
             Some(e) => self.cross(complex, scene, t.anchor, c, e, &angle)?,
         };
-        self.theta = angle;
-        self.last = exit.and_then(|e| crossed(e.vertex));
+        (self.theta, self.upper) = (angle.angle, angle.upper_half());
+        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(angle.angle, exit, next)))
@@ -967,7 +967,7 @@ impl<const K: usize> Walker<K> {
         if best
             .as_ref()
             .is_none_or(|(l, b, _)| ccw_before((lap, &a), (*l, b)))
-            && a.cmp(&self.theta) == Ordering::Greater
+            && a.cmp(&self.theta()) == Ordering::Greater
         {
             let exit = ChainExit {
                 chain,
@@ -1009,7 +1009,7 @@ impl<const K: usize> Walker<K> {
         if best
             .as_ref()
             .is_none_or(|(l, b, _)| cw_before((lap, Some(&a)), (*l, b.as_ref())))
-            && (self.full || a.cmp(&self.theta) == Ordering::Less)
+            && (self.full || a.cmp(&self.theta()) == Ordering::Less)
         {
             let exit = ChainExit {
                 chain,
@@ -1062,8 +1062,9 @@ impl<const K: usize> Walker<K> {
         };
         self.full = angle.is_none();
         let at = angle.map_or(Angle::ZERO, |a| a.angle);
-        self.theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
-        self.last = exit.and_then(|e| crossed(e.vertex));
+        let theta = angle.unwrap_or_else(|| Angle::ZERO.keyed());
+        (self.theta, self.upper) = (theta.angle, theta.upper_half());
+        self.last = exit.and_then(|e| u32::try_from(e.vertex).ok());
         self.lap = l;
         self.cur = next;
         Ok(Some(step_of(at, exit, next)))
