@@ -86,7 +86,8 @@ pub fn report(
         Uart,
         "vcx-firmware: size_of Angle {} B, ViewInterval {} B, Cylinder {} B, Vertex {} B, \
          Slots {} B, Arenas {} B, Ram {} B, Out {} B, FrameInterval {} B, \
-         TreeRam ({} walks, {} splits, {} hops) {} B, Frame ({} intervals) {} B",
+         TreeRam ({} walks, {} splits, {} hops) {} B, depth-5 TreeScratch<6, 5> {} B, \
+         Frame ({} intervals) {} B",
         size_of::<vcx::geom::sos::Angle>(),
         size_of::<vcx::walk::ViewInterval>(),
         size_of::<vcx::partition::Cylinder>(),
@@ -100,6 +101,8 @@ pub fn report(
         crate::app::TREE_SPLITS,
         crate::app::TREE_HOPS,
         size_of::<crate::app::TreeRam>(),
+        // The depth-5 tree through mirrors of the device-format issue's RAM target.
+        size_of::<vcx::walk::TreeScratch<6, 5>>(),
         crate::app::FRAME_CAPACITY,
         size_of::<crate::app::Frame>(),
     );

@@ -373,10 +373,10 @@ struct Tree<'a, 's, S: Storage> {
 /// and screens change none, so the default `H = S` always suffices. Deeper trees fail
 /// with [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than
 /// [`MAX_TREE_DEPTH`]. Reused across trees. Size on x86-64:
-/// `320·W + 192·S + 144·H + 296` bytes — walks of 320 bytes, splits of 192 (each in its
-/// own stack: a split is smaller than a walk), per hop 48 bytes and the exact directions
-/// of its two mapped range ends (96 bytes, [`Mapped`]), and the branch, the start hints of
-/// anchored walks and the edge hints of splits (`tree_scratch_is_bounded` in
+/// `248·W + 152·S + 136·H + 280` bytes — walks of 248 bytes, splits of 152 (each in its
+/// own stack: a split is smaller than a walk), per hop 40 bytes and the exact directions
+/// of its two mapped range ends (96 bytes, [`Mapped`]), and the primary eye, the branch,
+/// the start hints of anchored walks and the edge hints of splits (`tree_scratch_is_bounded` in
 /// `tests/tests/no_alloc.rs` prints it and checks it).
 pub struct TreeScratch<const W: usize, const S: usize = W, const H: usize = S> {
     stacks: Stacks<Fixed<W, S, H>>,
