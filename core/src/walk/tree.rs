@@ -330,7 +330,12 @@ impl Hop {
         not(any(feature = "mirrors", feature = "refraction")),
         allow(dead_code)
     )]
-    fn new(prev: QueryPoint, (a, b): (usize, usize), next: QueryPoint, level: usize) -> Option<Hop> {
+    fn new(
+        prev: QueryPoint,
+        (a, b): (usize, usize),
+        next: QueryPoint,
+        level: usize,
+    ) -> Option<Hop> {
         let fits = |v: usize| v < 1 << HOP_VERTEX_BITS;
         if !fits(a) || !fits(b) || level >= 1 << (32 - HOP_VERTEX_BITS) {
             return None;
