@@ -308,8 +308,9 @@ impl Piece {
 /// indices) and continues on a line through `next`; the stage starting at it hits the
 /// object at its branch index (its level).
 /// 40 bytes: a vertex index is below [`crate::scene::MAX_VERTICES`] = 2²⁶, so `a` keeps
-/// the level (at most `MAX_TREE_DEPTH + 1` < 2⁶) in its top 6 bits, checked where a hop
-/// is made ([`Hop::new`]; a byte of its own would pad the hop to 48 bytes).
+/// the level (a branch index plus at most one, so at most `MAX_TREE_DEPTH + 2` < 2⁶) in its
+/// top 6 bits, checked where a hop is made ([`Hop::new`]; a byte of its own would pad the
+/// hop to 48 bytes).
 #[derive(Clone, Copy, Debug)]
 struct Hop {
     prev: QueryPoint,
@@ -321,7 +322,7 @@ struct Hop {
 /// Bits of a vertex index in [`Hop::a_level`].
 const HOP_VERTEX_BITS: u32 = 26;
 const _: () = assert!(crate::scene::MAX_VERTICES <= 1 << HOP_VERTEX_BITS);
-const _: () = assert!(MAX_TREE_DEPTH + 1 < 1 << (32 - HOP_VERTEX_BITS));
+const _: () = assert!(MAX_TREE_DEPTH + 2 < 1 << (32 - HOP_VERTEX_BITS));
 
 impl Hop {
     /// `None` if a vertex index is past [`crate::scene::MAX_VERTICES`] or the level past
@@ -381,8 +382,8 @@ struct Tree<'a, 's, S: Storage> {
 /// `248·W + 152·S + 136·H + 280` bytes — walks of 248 bytes, splits of 152 (each in its
 /// own stack: a split is smaller than a walk), per hop 40 bytes and the exact directions
 /// of its two mapped range ends (96 bytes, [`Mapped`]), and the primary eye, the branch,
-/// the start hints of anchored walks and the edge hints of splits (`tree_scratch_is_bounded` in
-/// `tests/tests/no_alloc.rs` prints it and checks it).
+/// the start hints of anchored walks and the edge hints of splits
+/// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
 pub struct TreeScratch<const W: usize, const S: usize = W, const H: usize = S> {
     stacks: Stacks<Fixed<W, S, H>>,
 }
@@ -2007,9 +2008,9 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The vertex of the boundary of `rule` between the branches `left` and `right`; `q` is
-    /// the primary eye and `hops` the stack of hops, of which the rule's stage is a prefix. Out of line: its
-    /// 1024-bit tables (3.4 KiB) would otherwise take stack in every caller, even in the
-    /// walks that resolve no vertex (frames).
+    /// the primary eye and `hops` the stack of hops, of which the rule's stage is a prefix.
+    /// Out of line: its 1024-bit tables (3.4 KiB) would otherwise take stack in every
+    /// caller, even in the walks that resolve no vertex (frames).
     #[inline(never)]
     fn resolve(
         &self,
