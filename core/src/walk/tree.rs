@@ -997,14 +997,16 @@ enum SplitKind {
 }
 
 /// The range `(from, to)` from the frame's eye on `m` cut by `m`'s edges facing the eye
-/// (mirror, entry) or facing away (exit), yielded in the frame's direction.
+/// (mirror, entry) or facing away (exit), yielded in the frame's direction. Its first piece
+/// is always cut with the range at hand (by [`Tree::split`] before the frame is pushed, or
+/// fresh by an exit split's first [`Split::next_edge`]), and every later one starts
+/// strictly inside the range: the frame keeps no first boundary (32 bytes).
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 struct Split {
     level: Level,
     cut: Cut,
     from: Dir,
     to: Dir,
-    first: Boundary,
     /// The walks below it in the stack order ([`Stacks::push_split`]).
     walks: u16,
 }
@@ -1506,7 +1508,7 @@ fn sweep<S: Storage, F: Frames, K: FnMut(Interval<'_>)>(
     }
     let primary = tree.primary_walk(tree.primary_start(q, start, &f), depth, f, t, false);
     scratch.push(primary.level, Frame::Primary(primary))?;
-    tree.drive(scratch, &mut em, &mut Piece::empty())?;
+    tree.drive(scratch, &mut em, (&mut Piece::empty(), false))?;
     em.finish();
     Ok(())
 }
@@ -1612,8 +1614,8 @@ impl<S: Storage> Tree<'_, '_, S> {
             left_of_f: None,
             current: None,
         };
-        self.resolve_piece(scratch, walk.level, &mut last, &mut em, false)?;
-        self.drive(scratch, &mut em, &mut last)?;
+        let fresh = self.resolve_piece(scratch, walk.level, &mut last, &mut em, false)?;
+        self.drive(scratch, &mut em, (&mut last, fresh))?;
         em.finish();
         Ok(left)
     }
@@ -1629,13 +1631,12 @@ impl<S: Storage> Tree<'_, '_, S> {
         &self,
         sc: &mut Stacks<F>,
         em: &mut Emitter<'_, K>,
-        piece: &mut Piece,
+        (piece, mut fresh): (&mut Piece, bool),
     ) -> Result<(), WalkError> {
         let mut cluster = Cluster::empty();
-        // The top frame was just pushed, its range and first boundary as `piece` holds them:
-        // its first piece need not write what it shares with the range (the usual piece
-        // behind a mirror is the whole range).
-        let mut fresh = false;
+        // `fresh`: the top frame was just pushed, its range and first boundary as `piece`
+        // holds them: its first piece need not write what it shares with the range (the
+        // usual piece behind a mirror is the whole range).
         loop {
             let (stage, level_len) = sc.lengths()?;
             let eye = sc.eye();
@@ -1685,7 +1686,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                         Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
                         at,
                         (piece, fresh),
-                    ) {
+                    )? {
                         // Done with its last edge piece, the split leaves the stack now.
                         Some(e) if s.cut.done => {
                             sc.leave(level);
@@ -3326,13 +3327,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                     cut,
                     from: p.from.clone(),
                     to: p.to.clone(),
-                    first: p.boundary,
                     walks: 0,
                 },
             )?;
         }
         // `p` is the range: the ends and boundary the piece shares with it are there.
-        self.write_edge_piece((eye, stage, index), &e, p, None);
+        self.write_edge_piece((eye, stage, index), &e, p, None)?;
         self.change_eye(sc, level, m, kind, p, e.edge, left)?;
         Ok(true)
     }
@@ -3402,7 +3402,6 @@ impl<S: Storage> Tree<'_, '_, S> {
                     },
                     from: p.from.clone(),
                     to: p.to.clone(),
-                    first: p.boundary,
                     walks: 0,
                 },
             ),
@@ -3553,22 +3552,25 @@ impl SplitKind {
 impl Split {
     /// The next edge piece in the frame's direction: its edge, with its range in walk order
     /// and its first boundary written to `out` (its ceiling is left as it is); `eye`,
-    /// `stage` and `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the split's range
-    /// and first boundary (the split was just pushed with them).
+    /// `stage` and `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the
+    /// split's range and first boundary (the split was just pushed with them).
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         ends: Ends<'_>,
         (eye, stage, level): (QueryPoint, u8, u8),
         (out, fresh): (&mut Piece, bool),
-    ) -> Option<(usize, usize)> {
+    ) -> Result<Option<(usize, usize)>, WalkError> {
         let ccw = self.level.ccw;
-        let e = self
+        let Some(e) = self
             .cut
-            .next(tree, ends, (eye, ccw), (&self.from, &self.to))?;
-        let range = (!fresh).then_some((&self.from, &self.to, &self.first));
-        tree.write_edge_piece((eye, stage, level), &e, out, range);
-        Some(e.edge)
+            .next(tree, ends, (eye, ccw), (&self.from, &self.to))
+        else {
+            return Ok(None);
+        };
+        let range = (!fresh).then_some((&self.from, &self.to));
+        tree.write_edge_piece((eye, stage, level), &e, out, range)?;
+        Ok(Some(e.edge))
     }
 }
 
@@ -3721,25 +3723,25 @@ impl<S: Storage> Tree<'_, '_, S> {
         (eye, stage, level): (QueryPoint, u8, u8),
         e: &EdgePiece,
         out: &mut Piece,
-        range: Option<(&Dir, &Dir, &Boundary)>,
-    ) {
+        range: Option<(&Dir, &Dir)>,
+    ) -> Result<(), WalkError> {
         match (e.start, range) {
             // The hit (or exit) edge changes at vertex `v`.
             (Some(v), _) => {
                 out.from = self.toward(eye, v);
                 out.boundary = self.event_boundary((stage, level), &out.from);
             }
-            (None, Some((from, _, first))) => {
-                out.from = from.clone();
-                out.boundary = *first;
-            }
             (None, None) => {}
+            // Never: only a first piece starts at the range's start, and it is cut with the
+            // range at hand ([`Split`]).
+            (None, Some(_)) => return Err(WalkError::Corrupt),
         }
         match (e.end, range) {
             (Some(v), _) => out.to = self.toward(eye, v),
-            (None, Some((_, to, _))) => out.to = to.clone(),
+            (None, Some((_, to))) => out.to = to.clone(),
             (None, None) => {}
         }
+        Ok(())
     }
 }
 
