@@ -413,7 +413,7 @@ fn firmware_walk_matches_owned_view_and_reference() {
 #[test]
 fn firmware_trees_match_owned_frame_tree() {
     use vcx::render::{angle_order, coverage, Camera, FrameInterval, Piece};
-    use vcx::walk::{frame_tree, TreeScratch};
+    use vcx::walk::frame_tree;
     let _g = lock();
     let mut arenas = Box::new(app::Arenas::new());
     let mut ram = Box::new(app::Ram::new());
@@ -525,36 +525,23 @@ fn firmware_trees_match_owned_frame_tree() {
 
     // One walk fewer than the firmware's scratch is too few for some viewpoint, and says
     // so; so are one split and one hop fewer.
-    let mut fewer_walks = Box::new(TreeScratch::<
-        { app::TREE_WALKS - 1 },
-        { app::TREE_SPLITS },
-        { app::TREE_HOPS },
-    >::new());
+    use app::{TREE_HOPS as H, TREE_SPLITS as S, TREE_WALKS as W};
     assert!(
-        some_tree_too_deep(&complex, &s, &mut fewer_walks),
+        some_tree_too_deep::<_, { W - 1 }, S, H>(&complex, &s),
         "TREE_WALKS is more than the trees need"
     );
-    let mut fewer_splits = Box::new(TreeScratch::<
-        { app::TREE_WALKS },
-        { app::TREE_SPLITS - 1 },
-        { app::TREE_HOPS },
-    >::new());
     assert!(
-        some_tree_too_deep(&complex, &s, &mut fewer_splits),
+        some_tree_too_deep::<_, W, { S - 1 }, H>(&complex, &s),
         "TREE_SPLITS is more than the trees need"
     );
-    let mut fewer_hops = Box::new(TreeScratch::<
-        { app::TREE_WALKS },
-        { app::TREE_SPLITS },
-        { app::TREE_HOPS - 1 },
-    >::new());
     assert!(
-        some_tree_too_deep(&complex, &s, &mut fewer_hops),
+        some_tree_too_deep::<_, W, S, { H - 1 }>(&complex, &s),
         "TREE_HOPS is more than the trees need"
     );
 }
 
-/// Whether the firmware's frame from some viewpoint is `TreeTooDeep` with `scratch`.
+/// Whether the firmware's frame from some viewpoint is `TreeTooDeep` with a
+/// `TreeScratch<W, S, H>`.
 fn some_tree_too_deep<
     T: vcx::partition::Storage,
     const W: usize,
@@ -563,9 +550,9 @@ fn some_tree_too_deep<
 >(
     complex: &vcx::partition::Complex<T>,
     s: &vcx::SceneRef<'_>,
-    scratch: &mut vcx::walk::TreeScratch<W, S, H>,
 ) -> bool {
     use vcx::render::Camera;
+    let mut scratch = Box::new(vcx::walk::TreeScratch::<W, S, H>::new());
     viewpoints::VIEWPOINTS
         .iter()
         .enumerate()
@@ -580,7 +567,7 @@ fn some_tree_too_deep<
                 app::TREE_DEPTH,
                 from,
                 to,
-                scratch,
+                &mut scratch,
                 |_| {},
             );
             r == Err(WalkError::TreeTooDeep)
