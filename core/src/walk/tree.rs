@@ -934,10 +934,12 @@ impl Level {
 struct PrimaryWalk {
     level: Level,
     events: Events,
-    f: Angle,
     t: Angle,
     t_lap: u8,
     seen: Option<ObjectId>,
+    /// The start of the current piece. Until an event after `f`, exactly on `f`'s ray (a
+    /// vertex there, or `f`): it stands for `f` (a walk keeps no copy, 24 bytes; a tree
+    /// keeps a walk per level).
     cur_from: Dir,
     cur_boundary: Boundary,
     /// Closing on an event exactly at `t` that changes the object: end at that event
@@ -973,9 +975,11 @@ struct RangeWalk {
     /// The floor the walk keeps, and the lap of its end `to` (the walker's [`Trace`]).
     m: ObjectId,
     end_lap: u8,
-    from: Dir,
     to: Dir,
     seen: Option<ObjectId>,
+    /// The start of the current piece; until `past_from`, the range's start `from` (no
+    /// copy is kept: 32 bytes, and a tree keeps a walk per level), moved only onto `from`'s
+    /// exact ray or, between the rounded and the exact start, only in its rounded angle.
     cur_from: Dir,
     cur_boundary: Boundary,
     /// An event strictly after `from` was met: the exact angles of events only grow along
@@ -998,14 +1002,13 @@ enum SplitKind {
 
 /// The range `(from, to)` from the frame's eye on `m` cut by `m`'s edges facing the eye
 /// (mirror, entry) or facing away (exit), yielded in the frame's direction. Its first piece
-/// is always cut with the range at hand (by [`Tree::split`] before the frame is pushed, or
-/// fresh by an exit split's first [`Split::next_edge`]), and every later one starts
-/// strictly inside the range: the frame keeps no first boundary (32 bytes).
+/// is cut with the range at hand before the frame is pushed ([`Tree::first_edge`]), and
+/// every later one starts strictly inside the range, where the last one ended: the frame
+/// keeps neither the range's start nor its first boundary (64 bytes).
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 struct Split {
     level: Level,
     cut: Cut,
-    from: Dir,
     to: Dir,
     /// The walks below it in the stack order ([`Stacks::push_split`]).
     walks: u16,
@@ -1056,12 +1059,16 @@ impl EdgeIndex {
     }
 }
 
+/// An edge of an object: its vertices (global indices) in the object's order.
+#[cfg(any(feature = "mirrors", feature = "refraction"))]
+type Edge = (usize, usize);
+
 /// An edge piece of a split's range: the edge (global vertex indices in `m`'s order) and
 /// the vertices where its piece starts and ends in walk order (`None`: at the range's
 /// start or end).
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 struct EdgePiece {
-    edge: (usize, usize),
+    edge: Edge,
     start: Option<usize>,
     end: Option<usize>,
 }
@@ -1540,7 +1547,6 @@ impl<S: Storage> Tree<'_, '_, S> {
                 held_splits: 0,
             },
             events: Events::new(walker, true),
-            f,
             t,
             t_lap: u8::from(t.cmp_exact(&f) != Ordering::Greater),
             seen: self.complex.ceiling(start),
@@ -1685,18 +1691,14 @@ impl<S: Storage> Tree<'_, '_, S> {
                         self,
                         Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
                         at,
-                        (piece, fresh),
+                        piece,
                     )? {
                         // Done with its last edge piece, the split leaves the stack now.
                         Some(e) if s.cut.done => {
                             sc.leave(level);
-                            self.change_eye(sc, level, m, kind, piece, e, true)?;
-                            true
+                            self.change_eye(sc, level, m, kind, piece, e, true)?
                         }
-                        Some(e) => {
-                            self.change_eye(sc, level, m, kind, piece, e, false)?;
-                            true
-                        }
+                        Some(e) => self.change_eye(sc, level, m, kind, piece, e, false)?,
                         None => {
                             sc.pop(level);
                             false
@@ -1796,7 +1798,6 @@ impl PrimaryWalk {
         if self.done {
             return Ok(false);
         }
-        let f = self.f;
         let trace = self.trace(q);
         loop {
             // The walk ends past `t` (on lap 2): `t` closes the last piece.
@@ -1809,8 +1810,10 @@ impl PrimaryWalk {
                 return Ok(true);
             }
             let after = tree.complex.ceiling(c.last.cylinder);
+            // Against `f`, which `cur_from` stands for until the first event after it; later
+            // events lie after `cur_from` too (they come in order, each on its own ray).
             let at_f = match c.lap.cmp(&0) {
-                Ordering::Equal => c.first.angle.cmp_exact(&f),
+                Ordering::Equal => c.first.angle.cmp_exact(&self.cur_from.angle),
                 o => o,
             };
             match at_f {
@@ -2996,7 +2999,6 @@ impl<S: Storage> Tree<'_, '_, S> {
                 end_lap: end_lap.unwrap_or(0),
                 seen: self.complex.ceiling(start),
                 cur_from: from.clone(),
-                from: from.clone(),
                 to: to.clone(),
                 cur_boundary: *first,
                 past_from: false,
@@ -3048,10 +3050,13 @@ impl RangeWalk {
                     Ordering::Less => {}
                 }
                 let after = tree.complex.ceiling(c.last.cylinder);
+                // `cur_from` stands for `from` here: on its exact ray it places as `from`
+                // does (no later cluster is on that ray), and between the ends only its
+                // exact direction, which it keeps, places.
                 let opening = if self.past_from {
                     Ordering::Greater
                 } else {
-                    self.from
+                    self.cur_from
                         .place(ends, &c.first.angle, Ordering::Greater, ccw)
                 };
                 self.past_from = opening == Ordering::Greater;
@@ -3277,10 +3282,8 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// Splits the piece `p` seen from `level` by the edges of `m` and continues its first
-    /// edge piece (written over `p`). The split frame is pushed only if more may follow: a
-    /// split done with its first piece leaves its place to that piece's frame (the usual
-    /// mirror piece lies on one edge; a frame is large, and every push a copy). `true` if a
-    /// frame was pushed, as [`Tree::resolve_piece`].
+    /// edge piece (written over `p`). `true` if a frame was pushed, as
+    /// [`Tree::resolve_piece`].
     fn split<F: Frames>(
         &self,
         sc: &mut Stacks<F>,
@@ -3289,12 +3292,34 @@ impl<S: Storage> Tree<'_, '_, S> {
         kind: SplitKind,
         p: &mut Piece,
     ) -> Result<bool, WalkError> {
+        match self.first_edge(sc, level, m, kind, p)? {
+            Some((edge, left)) => self.change_eye(sc, level, m, kind, p, edge, left),
+            None => Ok(false),
+        }
+    }
+
+    /// Cuts the first edge piece of the split of `p`'s range (seen from `level`'s eye) by
+    /// the edges of `m`, written over `p`: its edge, and whether the split is done with it.
+    /// The split frame is pushed only if more may follow: a split done with its first piece
+    /// leaves its place to that piece's frame (the usual mirror piece lies on one edge; a
+    /// frame is large, and every push a copy). `None` if no edge piece: nothing pushed, the
+    /// stacks restored as `level`'s pop would.
+    fn first_edge<F: Frames>(
+        &self,
+        sc: &mut Stacks<F>,
+        level: Level,
+        m: ObjectId,
+        kind: SplitKind,
+        p: &mut Piece,
+    ) -> Result<Option<(Edge, bool)>, WalkError> {
         // The split's place, as if pushed.
         sc.room(level, true)?;
-        // Direct-mapped: the slot holds `m`'s edge, or another object's.
+        // Direct-mapped: the slot holds `m`'s edge, or another object's. Only splits by
+        // front edges keep hints (see [`Edges`]).
+        let front = kind.front();
         let slot = m.0 as usize % EDGE_HINTS;
         let hint = sc.edges.get(slot).copied().flatten();
-        let hint = hint.filter(|&(o, _)| o == m).map(|(_, k)| k);
+        let hint = hint.filter(|&(o, _)| front && o == m).map(|(_, k)| k);
         let mut cut = Cut {
             m,
             kind,
@@ -3304,28 +3329,28 @@ impl<S: Storage> Tree<'_, '_, S> {
             done: false,
         };
         let (stage, index) = sc.lengths()?;
-        let (eye, ends) = (sc.eye(), (&p.from, &p.to));
+        let eye = sc.eye();
         let Some(e) = cut.next(
             self,
             Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
             (eye, level.ccw),
-            ends,
+            (Some(&p.from), &p.to),
         ) else {
             sc.restore(level);
-            return Ok(false);
+            return Ok(None);
         };
-        if let (Some(h), Some(k)) = (sc.edges.get_mut(slot), cut.last) {
+        if let (true, Some(h), Some(k)) = (front, sc.edges.get_mut(slot), cut.last) {
             *h = Some((m, k));
         }
         let left = cut.done;
         if !left {
-            // More pieces may follow: the frame keeps the range, before `p` becomes the first.
+            // More pieces may follow: the frame keeps the range's end, before `p` becomes
+            // the first.
             sc.push_split(
                 level,
                 Split {
                     level,
                     cut,
-                    from: p.from.clone(),
                     to: p.to.clone(),
                     walks: 0,
                 },
@@ -3333,16 +3358,16 @@ impl<S: Storage> Tree<'_, '_, S> {
         }
         // `p` is the range: the ends and boundary the piece shares with it are there.
         self.write_edge_piece((eye, stage, index), &e, p, None)?;
-        self.change_eye(sc, level, m, kind, p, e.edge, left)?;
-        Ok(true)
+        Ok(Some((e.edge, left)))
     }
 
     /// Continues the edge piece `p` (its range in the split frame's direction, overwritten
     /// by the range seen behind the edge as [`Tree::map_range`] has it, and its first
-    /// boundary) of the split of `m` seen from `level`'s eye across the edge `(ia, ib)`: the
-    /// virtual eye beyond it, the hop on the stack and the frame that walks on (for an entry
-    /// edge, the split by the exit edges). `left`: the split (of `level`) is not on the
-    /// stack, done with this piece; the frame holds its place and restores its stacks.
+    /// boundary) of the split of `m` seen from `level`'s eye across the edge: the virtual
+    /// eye beyond it, the hop on the stack and the frame that walks on (for an entry edge,
+    /// first the split by the exit edges, [`Tree::first_edge`]). `left`: the split (of
+    /// `level`) is not on the stack, done with this piece; the frame holds its place and
+    /// restores its stacks. `true` if a frame was pushed, as [`Tree::resolve_piece`].
     #[allow(clippy::too_many_arguments)]
     fn change_eye<F: Frames>(
         &self,
@@ -3351,9 +3376,46 @@ impl<S: Storage> Tree<'_, '_, S> {
         m: ObjectId,
         kind: SplitKind,
         p: &mut Piece,
+        edge: (usize, usize),
+        left: bool,
+    ) -> Result<bool, WalkError> {
+        let here = self.hop(sc, level, kind, p, edge, left)?;
+        // Behind a refractive object's exit edge, neighbouring pieces' walks mostly start
+        // in one cylinder: a hint pays there (not behind mirrors).
+        let (here, hint) = match kind {
+            #[cfg(feature = "refraction")]
+            SplitKind::Entry(eta) => {
+                let exit = SplitKind::Exit(eta);
+                let Some((edge, left)) = self.first_edge(sc, here, m, exit, p)? else {
+                    return Ok(false);
+                };
+                (self.hop(sc, here, exit, p, edge, left)?, true)
+            }
+            // An exit split's later pieces (its first is continued above).
+            _ => (here, !kind.front()),
+        };
+        sc.branch.push(m).map_err(|_| WalkError::TreeTooDeep)?;
+        let deeper = Level {
+            depth: level.depth - 1,
+            ..here
+        };
+        self.push_range_walk(sc, deeper, m, (&p.from, &p.to), &p.boundary, hint)?;
+        Ok(true)
+    }
+
+    /// The change of eye across the edge `(ia, ib)` of the edge piece `p` of a split by
+    /// `kind` seen from `level`'s eye: the hop pushed, `p`'s range mapped behind it; the
+    /// level of the frame that continues it (turned where the hop flips orientation,
+    /// holding the split's place if `left`, as [`Tree::change_eye`]).
+    fn hop<F: Frames>(
+        &self,
+        sc: &mut Stacks<F>,
+        level: Level,
+        kind: SplitKind,
+        p: &mut Piece,
         (ia, ib): (usize, usize),
         left: bool,
-    ) -> Result<(), WalkError> {
+    ) -> Result<Level, WalkError> {
         let eye = sc.eye();
         let index = sc.branch.len();
         let (a, b) = (self.point(ia), self.point(ib));
@@ -3386,37 +3448,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         };
         self.map_range((&mut sc.exacts, &sc.hops), p, level.ccw, &hop, flip)?;
         sc.hops.push(hop)?;
-        match kind {
-            #[cfg(feature = "refraction")]
-            SplitKind::Entry(eta) => sc.push_split(
-                here,
-                Split {
-                    level: here,
-                    cut: Cut {
-                        m,
-                        kind: SplitKind::Exit(eta),
-                        last: None,
-                        last_start: (0, 0),
-                        hint: None,
-                        done: false,
-                    },
-                    from: p.from.clone(),
-                    to: p.to.clone(),
-                    walks: 0,
-                },
-            ),
-            _ => {
-                sc.branch.push(m).map_err(|_| WalkError::TreeTooDeep)?;
-                let deeper = Level {
-                    depth: level.depth - 1,
-                    ..here
-                };
-                // Behind a refractive object's exit edge, neighbouring pieces' walks
-                // mostly start in one cylinder: a hint pays there (not behind mirrors).
-                let hint = !flip;
-                self.push_range_walk(sc, deeper, m, (&p.from, &p.to), &p.boundary, hint)
-            }
-        }
+        Ok(here)
     }
 
     /// The edges of `m` facing `eye` (`front`) or facing away from it: each as `(a, b)` in
@@ -3550,26 +3582,26 @@ impl SplitKind {
 
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl Split {
-    /// The next edge piece in the frame's direction: its edge, with its range in walk order
-    /// and its first boundary written to `out` (its ceiling is left as it is); `eye`,
-    /// `stage` and `level` as for [`RangeWalk::next_piece`]. `fresh`: `out` holds the
-    /// split's range and first boundary (the split was just pushed with them).
+    /// The next edge piece in the frame's direction (never the first, [`Split`]): its
+    /// edge, with its range in walk order and its first boundary written to `out` (its
+    /// ceiling is left as it is); `eye`, `stage` and `level` as for
+    /// [`RangeWalk::next_piece`].
     fn next_edge<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         ends: Ends<'_>,
         (eye, stage, level): (QueryPoint, u8, u8),
-        (out, fresh): (&mut Piece, bool),
+        out: &mut Piece,
     ) -> Result<Option<(usize, usize)>, WalkError> {
         let ccw = self.level.ccw;
-        let Some(e) = self
-            .cut
-            .next(tree, ends, (eye, ccw), (&self.from, &self.to))
-        else {
+        // Never: a split on the stack has cut its first piece.
+        if self.cut.last.is_none() && !self.cut.done {
+            return Err(WalkError::Corrupt);
+        }
+        let Some(e) = self.cut.next(tree, ends, (eye, ccw), (None, &self.to)) else {
             return Ok(None);
         };
-        let range = (!fresh).then_some((&self.from, &self.to));
-        tree.write_edge_piece((eye, stage, level), &e, out, range)?;
+        tree.write_edge_piece((eye, stage, level), &e, out, Some(&self.to))?;
         Ok(Some(e.edge))
     }
 }
@@ -3578,31 +3610,45 @@ impl Split {
 impl Cut {
     /// The next edge piece of the range `(from, to)` seen from `eye` in the direction
     /// `ccw`. The nonempty pieces are disjoint, so each is the one whose start comes first
-    /// after the last one's.
+    /// after the last one's. `from` is needed for the first piece only (`None` after it:
+    /// `None` then, never, for a first piece): every later one starts where the last one
+    /// ended, strictly inside the range, so every test against `from` holds for it.
     fn next<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
         ends: Ends<'_>,
         (eye, ccw): (QueryPoint, bool),
-        (from, to): (&Dir, &Dir),
+        (from, to): (Option<&Dir>, &Dir),
     ) -> Option<EdgePiece> {
         if self.done {
             return None;
         }
         let front = self.kind.front();
-        let (lo, hi) = if ccw { (from, to) } else { (to, from) };
-        let (lv, hv) = (lo.angle.vector(), hi.angle.vector());
+        // The counter-clockwise ends; `None`: `from`, not at hand.
+        let (lo, hi) = if ccw {
+            (from, Some(to))
+        } else {
+            (Some(to), from)
+        };
+        let (lv, hv) = (lo.map(|d| d.angle.vector()), hi.map(|d| d.angle.vector()));
         // Both ends on one direction (see `map_range`): the one edge the ray just before
         // `hi` crosses, else the one just after it, as `push_range_walk` takes such a range.
-        if cross(lv, hv) == 0 {
-            self.done = true;
-            let edge = tree.split_collapsed(eye, self.m, hi, front)?;
-            return Some(EdgePiece {
-                edge,
-                start: None,
-                end: None,
-            });
+        // Only a first piece: such a split is done with it.
+        if let (Some(l), Some(h), Some(hi)) = (lv, hv, hi) {
+            if cross(l, h) == 0 {
+                self.done = true;
+                let edge = tree.split_collapsed(eye, self.m, hi, front)?;
+                return Some(EdgePiece {
+                    edge,
+                    start: None,
+                    end: None,
+                });
+            }
         }
+        // Whether `v` turns `s` from the end `d` (`None`: `from` for a later piece, which
+        // lies after it).
+        let turns =
+            |d: Option<&Dir>, v: (i128, i128), s: Sign| d.is_none_or(|d| d.turn(ends, v) == s);
         // In walk order: `a` before `b`.
         let before = |a: (i128, i128), b: (i128, i128)| {
             let c = cross(a, b);
@@ -3617,20 +3663,22 @@ impl Cut {
         let piece = |((_, _), (s0, s1)): ((usize, usize), (usize, usize))| {
             let (v0, v1) = (diff(tree.qpoint(s0), eye), diff(tree.qpoint(s1), eye));
             // Against the range ends exactly (`Dir::turn`), counter-clockwise.
-            let sv = (lo.turn(ends, v0) == Sign::Positive).then_some(v0);
-            let ev = (hi.turn(ends, v1) == Sign::Negative).then_some(v1);
+            let sv = turns(lo, v0, Sign::Positive).then_some(v0);
+            let ev = turns(hi, v1, Sign::Negative).then_some(v1);
             let nonempty = match (sv, ev) {
                 (Some(a), Some(b)) => cross(a, b) > 0,
-                (None, Some(b)) => lo.turn(ends, b) == Sign::Positive,
-                (Some(a), None) => hi.turn(ends, a) == Sign::Negative,
-                (None, None) => cross(lv, hv) > 0,
+                (None, Some(b)) => turns(lo, b, Sign::Positive),
+                (Some(a), None) => turns(hi, a, Sign::Negative),
+                (None, None) => lv.zip(hv).is_some_and(|(l, h)| cross(l, h) > 0),
             };
-            nonempty.then(|| {
-                if ccw {
-                    (sv.unwrap_or(lv), sv.map(|_| s0), ev.map(|_| s1))
-                } else {
-                    (ev.unwrap_or(hv), ev.map(|_| s1), sv.map(|_| s0))
-                }
+            if !nonempty {
+                return None;
+            }
+            // An end without its vertex is at hand (`turns` holds for an end not at hand).
+            Some(if ccw {
+                (sv.or(lv)?, sv.map(|_| s0), ev.map(|_| s1))
+            } else {
+                (ev.or(hv)?, ev.map(|_| s1), sv.map(|_| s0))
             })
         };
         // The facing edges of a convex polygon are seen in polygon order (front edges
@@ -3658,12 +3706,10 @@ impl Cut {
         // starting first. Without a hint (exit splits keep none), the edge the ray at the
         // start crosses is the likely one: tried the same way, it spares the scan's exact
         // turns (a wrong guess costs time, not a wrong piece).
-        let first = || {
+        let first = |from: &Dir| {
             let tried = match self.hint {
                 Some(k) => tree.facing_edge(eye, self.m, front, k.get()),
-                None => {
-                    tree.edge_toward(eye, self.m, front, if ccw { &lo.angle } else { &hi.angle })
-                }
+                None => tree.edge_toward(eye, self.m, front, &from.angle),
             };
             let hinted = tried.and_then(|(edge, ends, k)| {
                 let (key, start, end) = piece((edge, ends))?;
@@ -3691,7 +3737,12 @@ impl Cut {
             }
             best
         };
-        let found = if self.last.is_some() { next } else { first() };
+        let found = match (self.last, from) {
+            (Some(_), _) => next,
+            (None, Some(from)) => first(from),
+            // Never (see above).
+            (None, None) => None,
+        };
         let Some((key, edge, start, end, k)) = found else {
             self.done = true;
             return None;
@@ -3713,19 +3764,19 @@ impl Cut {
 #[cfg(any(feature = "mirrors", feature = "refraction"))]
 impl<S: Storage> Tree<'_, '_, S> {
     /// Writes the edge piece `e` seen from `eye` (its boundaries at the given stage and
-    /// level) to `out`: its range in walk order and its first boundary, the ends it shares
-    /// with the split's range from `range` (the range's ends and first boundary) — or
-    /// already in `out` if `None` (the piece the split was made from: the usual mirror
-    /// piece is the whole range, nothing to copy back). Field by field: a piece's fields
-    /// are large, and every move is a copy.
+    /// level) to `out`: its range in walk order and its first boundary, the end it shares
+    /// with the split's range from `to` (the range's end) — or already in `out` if `None`
+    /// (the piece the split was made from: the usual mirror piece is the whole range,
+    /// nothing to copy back). Field by field: a piece's fields are large, and every move is
+    /// a copy.
     fn write_edge_piece(
         &self,
         (eye, stage, level): (QueryPoint, u8, u8),
         e: &EdgePiece,
         out: &mut Piece,
-        range: Option<(&Dir, &Dir)>,
+        to: Option<&Dir>,
     ) -> Result<(), WalkError> {
-        match (e.start, range) {
+        match (e.start, to) {
             // The hit (or exit) edge changes at vertex `v`.
             (Some(v), _) => {
                 out.from = self.toward(eye, v);
@@ -3733,12 +3784,12 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
             (None, None) => {}
             // Never: only a first piece starts at the range's start, and it is cut with the
-            // range at hand ([`Split`]).
+            // range at hand ([`Tree::first_edge`]).
             (None, Some(_)) => return Err(WalkError::Corrupt),
         }
-        match (e.end, range) {
+        match (e.end, to) {
             (Some(v), _) => out.to = self.toward(eye, v),
-            (None, Some((_, to))) => out.to = to.clone(),
+            (None, Some(to)) => out.to = to.clone(),
             (None, None) => {}
         }
         Ok(())
@@ -4639,7 +4690,9 @@ mod tests {
                     let turn = cross(from.angle.vector(), to.angle.vector());
                     let ccw = turn > 0;
                     for kind in [SplitKind::Entry(eta), SplitKind::Exit(eta)] {
-                        let run = |hint: Option<EdgeIndex>| {
+                        // `from` at every piece, or (as a split frame has it) at the
+                        // first only.
+                        let run_from = |hint: Option<EdgeIndex>, every: bool| {
                             let mut cut = Cut {
                                 m,
                                 kind,
@@ -4649,14 +4702,19 @@ mod tests {
                                 done: false,
                             };
                             let mut out = Vec::new();
-                            for _ in 0..o.len() + 2 {
-                                let Some(e) =
-                                    cut.next(&tree, Ends::new(&[], &[], &[]), (q, ccw), (from, to))
-                                else {
+                            for i in 0..o.len() + 2 {
+                                let from = (every || i == 0).then_some(from);
+                                let ends = Ends::new(&[], &[], &[]);
+                                let Some(e) = cut.next(&tree, ends, (q, ccw), (from, to)) else {
                                     break;
                                 };
                                 out.push((e.edge, e.start, e.end));
                             }
+                            out
+                        };
+                        let run = |hint: Option<EdgeIndex>| {
+                            let out = run_from(hint, false);
+                            assert_eq!(out, run_from(hint, true), "{q:?} {from:?} {to:?} {m:?}");
                             out
                         };
                         let scan = run(EdgeIndex::new(o.len()));
@@ -4793,5 +4851,27 @@ mod tests {
                 assert_eq!(events.cluster(&c, &s, &trace, out), last);
             }
         }
+    }
+}
+#[cfg(test)]
+mod size_probe {
+    #[test]
+    fn sizes() {
+        use core::mem::size_of;
+        extern crate std;
+        std::println!(
+            "primary {} range {} frame {} split {} cut {} events {} walker {} dir {} boundary {} hop {} level {}",
+            size_of::<super::PrimaryWalk>(),
+            size_of::<super::RangeWalk>(),
+            size_of::<super::Frame>(),
+            size_of::<super::Split>(),
+            size_of::<super::Cut>(),
+            size_of::<super::Events>(),
+            size_of::<crate::walk::Walker>(),
+            size_of::<super::Dir>(),
+            size_of::<super::Boundary>(),
+            size_of::<super::Hop>(),
+            size_of::<super::Level>(),
+        );
     }
 }
