@@ -165,10 +165,15 @@ struct Ends<'e> {
 
 #[cfg(any(feature = "mirrors", feature = "refraction", feature = "screens"))]
 impl<'e> Ends<'e> {
-    fn new(mapped: &'e [Mapped], hops: &'e [Hop], points: &'e [Point]) -> Self {
+    /// `eye`: the primary eye, before the first of `hops`.
+    fn new(
+        mapped: &'e [Mapped],
+        (eye, hops): (QueryPoint, &'e [Hop]),
+        points: &'e [Point],
+    ) -> Self {
         Ends {
             mapped,
-            chain: HopChain { hops, points },
+            chain: HopChain { eye, hops, points },
         }
     }
 }
@@ -250,10 +255,7 @@ impl Boundary {
     /// The eye of the boundary's stage, from the primary eye `q` and the stack of hops it
     /// lies on.
     fn eye(&self, q: QueryPoint, hops: &[Hop]) -> QueryPoint {
-        match usize::from(self.stage).checked_sub(1) {
-            Some(i) => hops.get(i).map_or(q, |h| h.next),
-            None => q,
-        }
+        eye_before(q, hops, self.stage.into())
     }
 
     /// The exact primary angle, for a boundary of the primary stage.
@@ -304,16 +306,16 @@ impl Piece {
     }
 }
 
-/// One change of eye: a ray from `prev` hits the line of the edge `a → b` (global vertex
-/// indices) and continues on a line through `next`; the stage starting at it hits the
-/// object at its branch index (its level).
-/// 40 bytes: a vertex index is below [`crate::scene::MAX_VERTICES`] = 2²⁶, so `a` keeps
+/// One change of eye: a ray from the eye before it (`prev`: the last hop's `next` on the
+/// stack, or the primary eye, [`eye_before`]; not kept, 16 bytes) hits the line of the
+/// edge `a → b` (global vertex indices) and continues on a line through `next`; the stage
+/// starting at it hits the object at its branch index (its level).
+/// 24 bytes: a vertex index is below [`crate::scene::MAX_VERTICES`] = 2²⁶, so `a` keeps
 /// the level (a branch index plus at most one, so at most `MAX_TREE_DEPTH + 2` < 2⁶) in its
 /// top 6 bits, checked where a hop is made ([`Hop::new`]; a byte of its own would pad the
-/// hop to 48 bytes).
+/// hop to 32 bytes).
 #[derive(Clone, Copy, Debug)]
 struct Hop {
-    prev: QueryPoint,
     a_level: u32,
     b: u32,
     next: QueryPoint,
@@ -331,18 +333,12 @@ impl Hop {
         not(any(feature = "mirrors", feature = "refraction")),
         allow(dead_code)
     )]
-    fn new(
-        prev: QueryPoint,
-        (a, b): (usize, usize),
-        next: QueryPoint,
-        level: usize,
-    ) -> Option<Hop> {
+    fn new((a, b): (usize, usize), next: QueryPoint, level: usize) -> Option<Hop> {
         let fits = |v: usize| v < 1 << HOP_VERTEX_BITS;
         if !fits(a) || !fits(b) || level >= 1 << (32 - HOP_VERTEX_BITS) {
             return None;
         }
         Some(Hop {
-            prev,
             a_level: (a | level << HOP_VERTEX_BITS) as u32,
             b: b as u32,
             next,
@@ -360,6 +356,16 @@ impl Hop {
     /// Branch index of the object hit by the stage starting at this hop.
     fn level(&self) -> usize {
         (self.a_level >> HOP_VERTEX_BITS) as usize
+    }
+}
+
+/// The eye before hop `i` of `hops`, the first of which leaves the eye `q`: the last hop's
+/// `next`, or `q`.
+#[inline]
+fn eye_before(q: QueryPoint, hops: &[Hop], i: usize) -> QueryPoint {
+    match i.checked_sub(1) {
+        Some(j) => hops.get(j).map_or(q, |h| h.next),
+        None => q,
     }
 }
 
@@ -1667,7 +1673,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     let (c, at) = (&mut cluster, (eye, stage, level_len));
                     fresh = if w.next_piece(
                         self,
-                        Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+                        Ends::new(sc.exacts.flat(), (sc.eye, &sc.hops), self.scene.vertices()),
                         at,
                         (piece, fresh),
                         c,
@@ -1689,7 +1695,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     let at = (eye, stage, level_len);
                     fresh = match s.next_edge(
                         self,
-                        Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+                        Ends::new(sc.exacts.flat(), (sc.eye, &sc.hops), self.scene.vertices()),
                         at,
                         piece,
                     )? {
@@ -1966,7 +1972,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// the stack of hops).
     fn radians(&self, (q, hops): (QueryPoint, &[Hop]), rule: &Boundary) -> f64 {
         let d = self.map_dir(
-            hops.get(..rule.stage.into()).unwrap_or(hops),
+            (q, hops.get(..rule.stage.into()).unwrap_or(hops)),
             rule.eye(q, hops),
             rule.dir(),
         );
@@ -1985,28 +1991,34 @@ impl<S: Storage> Tree<'_, '_, S> {
     }
 
     /// The direction `dir` from `eye` after the hops `hops`, mapped back to a direction
-    /// from the first hop's `prev` eye (`f64`). Per hop the hit point `X = cur + t·d` on the
+    /// from the eye `first` before them (`f64`). Per hop the hit point `X = cur + t·d` on the
     /// edge's line is taken relative to the previous eye as `(cur − prev) + t·d`, with the
     /// numerator of `t` exact: no term is much larger than the result, so an eye next to
     /// the edge loses no precision (`X − prev` as `(a − prev) + u·(b − a)` cancels there).
-    fn map_dir(&self, hops: &[Hop], eye: QueryPoint, dir: (i128, i128)) -> (f64, f64) {
+    fn map_dir(
+        &self,
+        (first, hops): (QueryPoint, &[Hop]),
+        eye: QueryPoint,
+        dir: (i128, i128),
+    ) -> (f64, f64) {
         let mut d = (to_f64(dir.0), to_f64(dir.1));
         let mut cur = eye;
-        for hop in hops.iter().rev() {
+        for (i, hop) in hops.iter().enumerate().rev() {
+            let prev = eye_before(first, hops, i);
             let (a, b) = (self.qpoint(hop.a()), self.qpoint(hop.b()));
             let e = diff(b, a);
             let ef = (to_f64(e.0), to_f64(e.1));
             let den = d.0 * ef.1 - d.1 * ef.0;
             d = if den == 0.0 {
                 // Along the edge's line: its midpoint.
-                let ap = diff(a, hop.prev);
+                let ap = diff(a, prev);
                 (to_f64(ap.0) + 0.5 * ef.0, to_f64(ap.1) + 0.5 * ef.1)
             } else {
                 let t = to_f64(cross(diff(a, cur), e)) / den;
-                let cp = diff(cur, hop.prev);
+                let cp = diff(cur, prev);
                 (to_f64(cp.0) + t * d.0, to_f64(cp.1) + t * d.1)
             };
-            cur = hop.prev;
+            cur = prev;
         }
         d
     }
@@ -2034,8 +2046,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let dir = rule.dir();
         let mut r = Some((residue_i128(dir.0), residue_i128(dir.1)));
         for st in (0..stages).rev() {
-            let cur = hops.get(st + 1).map_or(rule_eye, |h| h.prev);
-            r = r.and_then(|r| self.map_hop_residue(hops.get(st)?, cur, r));
+            let hop = (eye_before(q, hops, st), hops.get(st));
+            r = r.and_then(|r| self.map_hop_residue((hop.0, hop.1?), r));
             if let Some(slot) = residues.get_mut(st) {
                 *slot = r;
             }
@@ -2043,7 +2055,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let mut mapped: Option<[Option<(Wide, Wide)>; MAX_STAGES]> = None;
         for st in 0..=stages {
             let (eye, level, origin) = match st.checked_sub(1).and_then(|i| hops.get(i)) {
-                None => (hops.first().map_or(rule_eye, |h| h.prev), 0, None),
+                None => (q, 0, None),
                 Some(h) => (h.next, h.level(), Some((h.a(), h.b()))),
             };
             let level = if st == stages {
@@ -2061,7 +2073,7 @@ impl<S: Storage> Tree<'_, '_, S> {
                     (cross(dir, w) == 0).then_some(dir.0 * w.0 + dir.1 * w.1)
                 });
                 return best
-                    .or_else(|| self.resolve_beyond(all, rule, left, right))
+                    .or_else(|| self.resolve_beyond((q, all), rule, left, right))
                     .or(rule.fallback().map(|v| v as usize));
             }
             // Different residues of `cross(d, w)`'s two products prove it nonzero.
@@ -2075,12 +2087,12 @@ impl<S: Storage> Tree<'_, '_, S> {
                     continue;
                 }
             }
-            let mapped = mapped.get_or_insert_with(|| self.map_exact(hops, rule_eye, rule));
+            let mapped = mapped.get_or_insert_with(|| self.map_exact((q, hops), rule));
             let best = match mapped.get(st).and_then(Option::as_ref) {
                 Some(d) => self.nearest_on_exact_ray(candidates, eye, d),
                 None => {
                     // Past the exact budget (more hops than `Wide` holds): `f64`.
-                    let d = self.map_dir(later, rule_eye, rule.dir());
+                    let d = self.map_dir((eye, later), rule_eye, rule.dir());
                     nearest_on_ray(candidates, |v| {
                         let w = diff(self.qpoint(v), eye);
                         let wf = (to_f64(w.0), to_f64(w.1));
@@ -2097,21 +2109,20 @@ impl<S: Storage> Tree<'_, '_, S> {
         rule.fallback().map(|v| v as usize)
     }
 
-    /// The boundary direction of `rule` (from `eye`, after `hops`) at every stage before
-    /// the last, mapped back hop by hop exactly ([`Tree::map_hop_exact`]); `None` past
-    /// `Wide`'s budget.
+    /// The boundary direction of `rule` (from the eye after `hops`, which leave the primary
+    /// eye `q`) at every stage before the last, mapped back hop by hop exactly
+    /// ([`Tree::map_hop_exact`]); `None` past `Wide`'s budget.
     fn map_exact(
         &self,
-        hops: &[Hop],
-        eye: QueryPoint,
+        (q, hops): (QueryPoint, &[Hop]),
         rule: &Boundary,
     ) -> [Option<(Wide, Wide)>; MAX_STAGES] {
         let mut mapped = [None; MAX_STAGES];
         let (x, y) = rule.dir();
         let mut d = Some((Wide::from_i128(x), Wide::from_i128(y)));
         for st in (0..hops.len()).rev() {
-            let cur = hops.get(st + 1).map_or(eye, |h| h.prev);
-            d = d.and_then(|d| self.map_hop_exact(hops.get(st)?, cur, &d));
+            let hop = (eye_before(q, hops, st), hops.get(st));
+            d = d.and_then(|d| self.map_hop_exact((hop.0, hop.1?), &d));
             if let Some(slot) = mapped.get_mut(st) {
                 *slot = d;
             }
@@ -2127,15 +2138,16 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// or past `Wide`'s budget.
     fn resolve_beyond(
         &self,
-        hops: &[Hop],
+        (q, hops): (QueryPoint, &[Hop]),
         rule: &Boundary,
         left: &[ObjectId],
         right: &[ObjectId],
     ) -> Option<usize> {
         let (x, y) = rule.dir();
         let mut d = (Wide::from_i128(x), Wide::from_i128(y));
-        for hop in hops.get(usize::from(rule.stage)..)? {
-            d = self.map_hop_forward(hop, &d)?;
+        let stage = usize::from(rule.stage);
+        for (i, hop) in hops.iter().enumerate().skip(stage) {
+            d = self.map_hop_forward((eye_before(q, hops, i), hop), &d)?;
             let owners = [
                 left.get(hop.level()).copied(),
                 right.get(hop.level()).copied(),
@@ -2192,11 +2204,15 @@ impl<S: Storage> Tree<'_, '_, S> {
         })
     }
 
-    /// The direction `d` from `hop.prev` continued through `hop`: from `hop.next` to the
-    /// hit `X = prev + (num/den)·d` on the edge's line, `(prev − next)·den + num·d` times
-    /// the sign of `den` (a positive multiple). `None` along the edge's line or past
-    /// `Wide`'s budget (bits as [`Tree::map_hop_exact`]).
-    fn map_hop_forward(&self, hop: &Hop, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
+    /// The direction `d` from `prev` continued through `hop` (which leaves `prev`): from
+    /// `hop.next` to the hit `X = prev + (num/den)·d` on the edge's line,
+    /// `(prev − next)·den + num·d` times the sign of `den` (a positive multiple). `None`
+    /// along the edge's line or past `Wide`'s budget (bits as [`Tree::map_hop_exact`]).
+    fn map_hop_forward(
+        &self,
+        (prev, hop): (QueryPoint, &Hop),
+        d: &(Wide, Wide),
+    ) -> Option<(Wide, Wide)> {
         let a = self.qpoint(hop.a());
         let e = diff(self.qpoint(hop.b()), a);
         let den = Wide::cross(d, e)?;
@@ -2204,7 +2220,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             Sign::Zero => return None,
             s => s == Sign::Negative,
         };
-        let (num, pn) = (cross(diff(a, hop.prev), e), diff(hop.prev, hop.next));
+        let (num, pn) = (cross(diff(a, prev), e), diff(prev, hop.next));
         let x = den.mul_i128(pn.0)?.add(&d.0.mul_i128(num)?)?;
         let y = den.mul_i128(pn.1)?.add(&d.1.mul_i128(num)?)?;
         Some(if negative { (x.neg(), y.neg()) } else { (x, y) })
@@ -2214,7 +2230,12 @@ impl<S: Storage> Tree<'_, '_, S> {
     /// hit's denominator may be zero (its residue is), where the exact hop takes the
     /// edge's midpoint instead. Equal exact directions have equal residues up to sign, so
     /// different residues of a cross product's two terms prove it nonzero.
-    fn map_hop_residue(&self, hop: &Hop, cur: QueryPoint, d: (u64, u64)) -> Option<(u64, u64)> {
+    fn map_hop_residue(
+        &self,
+        (prev, hop): (QueryPoint, &Hop),
+        d: (u64, u64),
+    ) -> Option<(u64, u64)> {
+        let cur = hop.next;
         let mul = |a: u64, b: u64| mod_p(u128::from(a) * u128::from(b));
         let add = |a: u64, b: u64| mod_p(u128::from(a) + u128::from(b));
         let a = self.qpoint(hop.a());
@@ -2224,26 +2245,31 @@ impl<S: Storage> Tree<'_, '_, S> {
         if den == 0 {
             return None;
         }
-        let (num, cp) = (residue_i128(cross(diff(a, cur), e)), diff(cur, hop.prev));
+        let (num, cp) = (residue_i128(cross(diff(a, cur), e)), diff(cur, prev));
         Some((
             add(mul(den, residue_i128(cp.0)), mul(d.0, num)),
             add(mul(den, residue_i128(cp.1)), mul(d.1, num)),
         ))
     }
 
-    /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `cur` (the eye after
-    /// `hop`) mapped back to a direction from `hop.prev`, scaled by the hit's denominator;
+    /// One hop of [`Tree::map_dir`] exactly: the direction `d` from `hop.next` mapped back
+    /// to a direction from `prev` (the eye `hop` leaves), scaled by the hit's denominator;
     /// `None` past `Wide`'s 1024 bits. Bit budget: a direction of `b` bits becomes one of
     /// at most `b + 102` (query differences ≤ 2⁵³, edges ≤ 2⁴⁸), so 9 hops from a 54-bit
     /// direction fit and the final cross with a query difference too.
-    fn map_hop_exact(&self, hop: &Hop, cur: QueryPoint, d: &(Wide, Wide)) -> Option<(Wide, Wide)> {
+    fn map_hop_exact(
+        &self,
+        (prev, hop): (QueryPoint, &Hop),
+        d: &(Wide, Wide),
+    ) -> Option<(Wide, Wide)> {
+        let cur = hop.next;
         let a = self.qpoint(hop.a());
         let e = diff(self.qpoint(hop.b()), a);
         let den = Wide::cross(d, e)?;
         Some(match den.sign() {
             // Along the edge's line: its midpoint, as `map_dir`.
             Sign::Zero => {
-                let ap = diff(a, hop.prev);
+                let ap = diff(a, prev);
                 (
                     Wide::from_i128(2 * ap.0 + e.0),
                     Wide::from_i128(2 * ap.1 + e.1),
@@ -2251,7 +2277,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             }
             // `X − prev = (cur − prev) + (num / den)·d`, times `|den|`.
             s => {
-                let (num, cp) = (cross(diff(a, cur), e), diff(cur, hop.prev));
+                let (num, cp) = (cross(diff(a, cur), e), diff(cur, prev));
                 let x = den.mul_i128(cp.0)?.add(&d.0.mul_i128(num)?)?;
                 let y = den.mul_i128(cp.1)?.add(&d.1.mul_i128(num)?)?;
                 if s == Sign::Negative {
@@ -3117,7 +3143,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         Dir::vertex(Angle::from_query(eye, ranked(self.scene, v)), v)
     }
 
-    /// The range end `end` (a direction from `hop.prev`) seen from `hop.next`, written over
+    /// The range end `end` (a direction from the eye `hop` leaves, the top of `chain`) seen
+    /// from `hop.next`, written over
     /// it (no move of a returned end): exact if it points at an endpoint of the hop's edge
     /// (or the hit point falls on or beyond one),
     /// otherwise the direction to the hit point on the edge's line, computed in `f64` (it
@@ -3148,7 +3175,8 @@ impl<S: Storage> Tree<'_, '_, S> {
             return Err(WalkError::Corrupt);
         }
         // The hit's parameter on the edge is `u = nu / den`.
-        let nu = cross(d, diff(hop.prev, a));
+        let prev = chain.prev(chain.hops.len());
+        let nu = cross(d, diff(prev, a));
         // At or beyond an end of the edge (by rounding): that endpoint, exactly.
         if let Some(at_b) = edge_end(nu, den) {
             *end = self.toward(hop.next, if at_b { hop.b() } else { hop.a() });
@@ -3157,7 +3185,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // Strictly inside the edge (exactly: the quotient of the correctly rounded terms
         // lies in (0, 1) only if the exact one does). Through an axis-parallel mirror edge
         // an exact end stays exact (`reflected`): no rounding and no wide directions.
-        let num = cross(diff(a, hop.prev), e);
+        let num = cross(diff(a, prev), e);
         let axis = e.0 == 0 || e.1 == 0;
         if mirror && axis && end.exact.is_none() {
             if let Some(dir) = reflected(d, e, num, den) {
@@ -3170,7 +3198,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         // direction keeps `f64` precision instead of the query grid's, so that a range far
         // thinner than a grid step at the edge keeps its two ends apart.
         let t = to_f64(num) / to_f64(den);
-        let pn64 = diff64(hop.prev, hop.next);
+        let pn64 = diff64(prev, hop.next);
         let pn = (i128::from(pn64.0), i128::from(pn64.1));
         let (fx, fy) = (
             to_f64(pn.0) + t * to_f64(d.0),
@@ -3207,7 +3235,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let dir = Direction::new(vx as i64, vy as i64).ok_or(WalkError::Corrupt)?;
         // The same exactly, as a recipe and an enclosure (`mapped`), kept on the stack of
         // exact directions until the frame walking it is popped; none past `Wide`'s budget.
-        let t = Terms::of(hop, chain.points);
+        let t = Terms::of((prev, hop), chain.points);
         let here = u8::try_from(chain.hops.len()).map_err(|_| WalkError::TreeTooDeep)?;
         let mapped = match end.exact.and_then(|i| below.get(usize::from(i))) {
             Some(x) => x.through(chain, &t, here, mirror && axis),
@@ -3241,7 +3269,7 @@ impl<S: Storage> Tree<'_, '_, S> {
     #[inline(always)]
     fn map_range<E: ExactStack>(
         &self,
-        (exacts, hops): (&mut E, &[Hop]),
+        (exacts, (eye, hops)): (&mut E, (QueryPoint, &[Hop])),
         p: &mut Piece,
         ccw: bool,
         hop: &Hop,
@@ -3259,6 +3287,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             (&mut p.to, &mut p.from)
         };
         let chain = HopChain {
+            eye,
             hops,
             points: self.scene.vertices(),
         };
@@ -3332,7 +3361,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         let eye = sc.eye();
         let Some(e) = cut.next(
             self,
-            Ends::new(sc.exacts.flat(), &sc.hops, self.scene.vertices()),
+            Ends::new(sc.exacts.flat(), (sc.eye, &sc.hops), self.scene.vertices()),
             (eye, level.ccw),
             (Some(&p.from), &p.to),
         ) else {
@@ -3436,7 +3465,7 @@ impl<S: Storage> Tree<'_, '_, S> {
             return Err(WalkError::DegenerateOptics { level: index });
         }
         // Vertex indices are below `MAX_VERTICES`, and levels bounded by the branch.
-        let hop = Hop::new(eye, (ia, ib), eye2, hop_level).ok_or(WalkError::TreeTooDeep)?;
+        let hop = Hop::new((ia, ib), eye2, hop_level).ok_or(WalkError::TreeTooDeep)?;
         let turned = Level {
             ccw: level.ccw != flip,
             ..level
@@ -3446,7 +3475,13 @@ impl<S: Storage> Tree<'_, '_, S> {
         } else {
             turned.marks(sc)?
         };
-        self.map_range((&mut sc.exacts, &sc.hops), p, level.ccw, &hop, flip)?;
+        self.map_range(
+            (&mut sc.exacts, (sc.eye, &sc.hops)),
+            p,
+            level.ccw,
+            &hop,
+            flip,
+        )?;
         sc.hops.push(hop)?;
         Ok(here)
     }
@@ -4137,15 +4172,15 @@ mod tests {
         };
         let mut compared = 0;
         for round in 0..200 {
+            let q = |x: i64, y: i64| QueryPoint::from_raw(x << 20, y << 20).unwrap();
+            let first = q(next(1000), next(1000));
             let hops: Vec<Hop> = (0..1 + round % 5)
                 .map(|_| {
                     let k = next(5).unsigned_abs() as usize % 4;
-                    let q = |x: i64, y: i64| QueryPoint::from_raw(x << 20, y << 20).unwrap();
-                    let (prev, next) = (q(next(1000), next(1000)), q(next(1000), next(1000)));
-                    Hop::new(prev, (4 + k, 4 + (k + 1) % 4), next, 0).unwrap()
+                    let eye = q(next(1000), next(1000));
+                    Hop::new((4 + k, 4 + (k + 1) % 4), eye, 0).unwrap()
                 })
                 .collect();
-            let eye = QueryPoint::from_raw(next(1 << 40), next(1 << 40)).unwrap();
             // Every fourth round the direction runs along the last hop's edge.
             let dir = if round % 4 == 0 {
                 let h = hops.last().unwrap();
@@ -4163,9 +4198,9 @@ mod tests {
             ));
             let mut d = Some((Wide::from_i128(dir.0), Wide::from_i128(dir.1)));
             for st in (0..hops.len()).rev() {
-                let cur = hops.get(st + 1).map_or(eye, |h| h.prev);
-                r = r.and_then(|r| tree.map_hop_residue(&hops[st], cur, r));
-                d = d.and_then(|d| tree.map_hop_exact(&hops[st], cur, &d));
+                let hop = (super::eye_before(first, &hops, st), &hops[st]);
+                r = r.and_then(|r| tree.map_hop_residue(hop, r));
+                d = d.and_then(|d| tree.map_hop_exact(hop, &d));
                 if round % 4 == 0 && st + 1 == hops.len() {
                     assert!(r.is_none(), "round {round}: along the edge");
                 }
@@ -4543,7 +4578,7 @@ mod tests {
                 // the event of `h` on the opening ray, which moves the start onto `h`.
                 let v = from.angle.vector();
                 let exacts = [Mapped::exactly((v.0 as i64, v.1 as i64), 0)];
-                let mapped = Ends::new(&exacts, &[], &[]);
+                let mapped = Ends::new(&exacts, (QueryPoint::ORIGIN, &[]), &[]);
                 let (mut x, mut y) = v;
                 while x.abs().max(y.abs()) >= 1 << 30 {
                     (x, y) = (x >> 1, y >> 1);
@@ -4704,7 +4739,7 @@ mod tests {
                             let mut out = Vec::new();
                             for i in 0..o.len() + 2 {
                                 let from = (every || i == 0).then_some(from);
-                                let ends = Ends::new(&[], &[], &[]);
+                                let ends = Ends::new(&[], (q, &[]), &[]);
                                 let Some(e) = cut.next(&tree, ends, (q, ccw), (from, to)) else {
                                     break;
                                 };

@@ -37,9 +37,9 @@
     allow(dead_code)
 )]
 
-use super::{cross, diff, diff64, Hop};
+use super::{cross, diff, diff64, eye_before, Hop};
 use crate::geom::wide::{i128_to_f64 as to_f64, Wide};
-use crate::geom::{Point, Sign};
+use crate::geom::{Point, QueryPoint, Sign};
 
 /// `2⁻⁵⁰`: the relative error charged per rounded expression (see the module documentation).
 const U: f64 = 1.0 / (1u64 << 50) as f64;
@@ -80,8 +80,9 @@ pub(super) struct Terms {
 }
 
 impl Terms {
-    /// The terms of `hop`, whose edge's vertices are `points[hop.a()]`, `points[hop.b()]`.
-    pub fn of(hop: &Hop, points: &[Point]) -> Terms {
+    /// The terms of `hop`, which leaves the eye `prev`, whose edge's vertices are
+    /// `points[hop.a()]`, `points[hop.b()]`.
+    pub fn of((prev, hop): (QueryPoint, &Hop), points: &[Point]) -> Terms {
         let q = |i: usize| points.get(i).copied().unwrap_or_default().to_query();
         let a = q(hop.a());
         let e = diff(q(hop.b()), a);
@@ -92,18 +93,27 @@ impl Terms {
             e
         };
         Terms {
-            pn: diff64(hop.prev, hop.next),
+            pn: diff64(prev, hop.next),
             e1,
-            num1: cross(diff(a, hop.prev), e1),
+            num1: cross(diff(a, prev), e1),
         }
     }
 }
 
-/// The stack of hops the ends were mapped through, and the scene's vertices.
+/// The stack of hops the ends were mapped through, the eye its first hop leaves (the
+/// primary eye), and the scene's vertices.
 #[derive(Clone, Copy)]
 pub(super) struct HopChain<'e> {
+    pub eye: QueryPoint,
     pub hops: &'e [Hop],
     pub points: &'e [Point],
+}
+
+impl HopChain<'_> {
+    /// The eye hop `i` leaves.
+    pub fn prev(&self, i: usize) -> QueryPoint {
+        eye_before(self.eye, self.hops, i)
+    }
 }
 
 /// Bit length of `|v|`.
@@ -140,7 +150,7 @@ fn certain(c: f64, rc: f64) -> Option<Sign> {
 }
 
 impl Mapped {
-    /// The exact direction `d` (from `hop.prev`) mapped through the hop at index `at` of
+    /// The exact direction `d` (from the eye the hop leaves) mapped through the hop at index `at` of
     /// the stack of hops, whose `den = cross(d, e1)` is not zero.
     pub fn start(d: (i64, i64), t: &Terms, at: u8) -> Option<Mapped> {
         Mapped::exactly(d, at).general(t, at, || {
@@ -163,7 +173,7 @@ impl Mapped {
         }
     }
 
-    /// This direction (from `hop.prev`) mapped through the hop at index `at` of the stack
+    /// This direction (from the eye the hop leaves) mapped through the hop at index `at` of the stack
     /// of hops, right above the hops it went through: by [`reflect_axis`] if `reflect`.
     /// `None` where the exact map gives none (`den = 0`, [`reflect_axis`]'s `t = 0`, past
     /// `Wide`'s budget or past [`MAX_CHAIN`] hops).
@@ -284,14 +294,15 @@ impl Mapped {
     /// mapped it in full; `None` only if its hops are no longer on the stack.
     #[inline(never)]
     pub fn exact(&self, c: HopChain<'_>) -> Option<(Wide, Wide)> {
-        let hops = c.hops.get(usize::from(self.first)..usize::from(self.end))?;
+        let first = usize::from(self.first);
+        let hops = c.hops.get(first..usize::from(self.end))?;
         let mut x = (
             Wide::from_i128(self.origin.0.into()),
             Wide::from_i128(self.origin.1.into()),
         );
         let mut out = x;
         for (i, hop) in hops.iter().enumerate() {
-            let t = Terms::of(hop, c.points);
+            let t = Terms::of((c.prev(first + i), hop), c.points);
             let pn = (i128::from(t.pn.0), i128::from(t.pn.1));
             let ok = if self.axis >> i & 1 == 1 {
                 reflect_axis(&x, t.e1, t.num1, &mut out)
@@ -395,7 +406,9 @@ mod tests {
             let d = (int(2 * bits + 2).max(1), int(2 * bits + 2));
             let mut m = Mapped::exactly(d, 0);
             // An exact zero is never decided by the enclosure.
+            let start = eye;
             let chain = HopChain {
+                eye: start,
                 hops: &hops,
                 points: &points,
             };
@@ -434,10 +447,11 @@ mod tests {
                 let next = QueryPoint::from_raw(q(int(eb)), q(int(eb))).unwrap();
                 points.extend([a, b]);
                 let ends = (points.len() - 2, points.len() - 1);
-                let hop = Hop::new(eye, ends, next, 0).unwrap();
-                let t = Terms::of(&hop, &points);
+                let hop = Hop::new(ends, next, 0).unwrap();
+                let t = Terms::of((eye, &hop), &points);
                 let axis = t.e1.0 == 0 || t.e1.1 == 0;
                 let below = HopChain {
+                    eye: start,
                     hops: &hops,
                     points: &points,
                 };
@@ -457,6 +471,7 @@ mod tests {
                 m = mapped;
                 grazing_kept += u64::from(grazing);
                 let chain = HopChain {
+                    eye: start,
                     hops: &hops,
                     points: &points,
                 };
