@@ -385,8 +385,8 @@ struct Tree<'a, 's, S: Storage> {
 /// and screens change none, so the default `H = S` always suffices. Deeper trees fail
 /// with [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than
 /// [`MAX_TREE_DEPTH`]. Reused across trees. Size on x86-64:
-/// `248·W + 120·S + 136·H + 280` bytes — walks of 248 bytes, splits of 120 (each in its
-/// own stack: a split is smaller than a walk), per hop 40 bytes and the exact directions
+/// `216·W + 88·S + 120·H + 280` bytes — walks of 216 bytes, splits of 88 (each in its
+/// own stack: a split is smaller than a walk), per hop 24 bytes and the exact directions
 /// of its two mapped range ends (96 bytes, [`Mapped`]), and the primary eye, the branch,
 /// the start hints of anchored walks and the edge hints of splits
 /// (`tree_scratch_is_bounded` in `tests/tests/no_alloc.rs` prints it and checks it).
