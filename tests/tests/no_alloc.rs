@@ -724,7 +724,7 @@ fn lock_step_ray_trees_allocate_nothing() {
 /// A scratch too small for the tree, in walks, splits or hops, is an error, never a panic or
 /// a cut tree; a tree through mirrors only needs a walk per level and one more, a split and
 /// a hop per level; and the scratch's size is within the documented
-/// `224·W + 96·S + 128·H + 368` (`216·W + 88·S + 120·H + 280` on x86-64).
+/// `224·W + 80·S + 128·H + 368` (`216·W + 72·S + 120·H + 280` on x86-64).
 #[test]
 fn tree_scratch_is_bounded() {
     let _g = lock();
@@ -767,7 +767,7 @@ fn tree_scratch_is_bounded() {
     ] {
         println!("TreeScratch<{w}, {sp}, {h}>: {size} bytes");
         assert!(
-            size <= 224 * w + 96 * sp + 128 * h + 368,
+            size <= 224 * w + 80 * sp + 128 * h + 368,
             "TreeScratch<{w}, {sp}, {h}> is {size} bytes"
         );
     }

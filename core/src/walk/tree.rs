@@ -385,7 +385,7 @@ struct Tree<'a, 's, S: Storage> {
 /// and screens change none, so the default `H = S` always suffices. Deeper trees fail
 /// with [`WalkError::TreeTooDeep`], never overflow; so do trees deeper than
 /// [`MAX_TREE_DEPTH`]. Reused across trees. Size on x86-64:
-/// `216·W + 88·S + 120·H + 280` bytes — walks of 216 bytes, splits of 88 (each in its
+/// `216·W + 72·S + 120·H + 280` bytes — walks of 216 bytes, splits of 72 (each in its
 /// own stack: a split is smaller than a walk), per hop 24 bytes and the exact directions
 /// of its two mapped range ends (96 bytes, [`Mapped`]), and the primary eye, the branch,
 /// the start hints of anchored walks and the edge hints of splits
@@ -1032,13 +1032,10 @@ enum Split {}
 struct Cut {
     m: ObjectId,
     kind: SplitKind,
-    /// The start direction (from the eye) and the edge of the last edge piece yielded.
-    /// In `i64`s and an [`EdgeIndex`] (56 bytes less than `i128`s and an `Option<usize>`;
-    /// a tree keeps a cut per split): the direction is an [`Angle`]'s or the difference of
-    /// two query points, each below 2⁵³ in magnitude.
+    /// The edge of the last edge piece yielded, as an [`EdgeIndex`] (4 bytes; a tree keeps
+    /// a cut per split). The next piece is its neighbour's, which starts where it ended
+    /// ([`Cut::next`]), so its start direction is not kept (16 bytes).
     last: Option<EdgeIndex>,
-    /// The start direction of the last piece, where `last` is some.
-    last_start: (i64, i64),
     /// An edge to try first for the first piece: taken if its piece starts at the start
     /// of the range (see [`Edges`]).
     hint: Option<EdgeIndex>,
@@ -3356,7 +3353,6 @@ impl<S: Storage> Tree<'_, '_, S> {
             m,
             kind,
             last: None,
-            last_start: (0, 0),
             hint,
             done: false,
         };
@@ -3725,12 +3721,11 @@ impl Cut {
         // The facing edges of a convex polygon are seen in polygon order (front edges
         // counter-clockwise in decreasing order, back edges in increasing order), and the
         // pieces of the range are contiguous: after the first piece, the next is the
-        // neighbouring edge's, or there is none.
+        // neighbouring edge's, or there is none. It starts at the vertex the two edges
+        // share, where the last piece ended (it was not done, so it ended strictly inside
+        // the range, after its own start): after the last piece.
         let next = self.last.and_then(|k| {
-            let (l, k) = (
-                (i128::from(self.last_start.0), i128::from(self.last_start.1)),
-                k.get(),
-            );
+            let k = k.get();
             let n = tree.scene.object(self.m).map_or(0, |o| o.len());
             let up = front != ccw;
             let k = if up {
@@ -3740,7 +3735,7 @@ impl Cut {
             };
             let e = tree.facing_edge(eye, self.m, front, k)?;
             let (key, start, end) = piece((e.0, e.1))?;
-            before(l, key).then_some((key, e.0, start, end, k))
+            Some((key, e.0, start, end, k))
         });
         // The first piece: the hinted edge's if it starts at the start of the range (no
         // start vertex: every other piece starts strictly inside it), else the one
@@ -3784,20 +3779,15 @@ impl Cut {
             // Never (see above).
             (None, None) => None,
         };
-        let Some((key, edge, start, end, k)) = found else {
+        let Some((_, edge, start, end, k)) = found else {
             self.done = true;
             return None;
         };
-        // Never `None` (see `last`), which would only end the split early.
-        let last =
-            (i64::try_from(key.0).ok().zip(i64::try_from(key.1).ok())).zip(EdgeIndex::new(k));
-        self.done = last.is_none();
-        if let Some((start, k)) = last {
-            (self.last_start, self.last) = (start, Some(k));
-        }
-        // The piece reaches the end of the range: the facing edges' pieces are disjoint, so
-        // no later one is nonempty.
-        self.done |= end.is_none();
+        // `None` never (an object's edge), which would only end the split early. The piece
+        // reaches the end of the range: the facing edges' pieces are disjoint, so no later
+        // one is nonempty.
+        self.last = EdgeIndex::new(k);
+        self.done = self.last.is_none() || end.is_none();
         Some(EdgePiece { edge, start, end })
     }
 }
@@ -4738,7 +4728,6 @@ mod tests {
                                 m,
                                 kind,
                                 last: None,
-                                last_start: (0, 0),
                                 hint,
                                 done: false,
                             };
