@@ -2044,8 +2044,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let dir = rule.dir();
         let mut r = Some((residue_i128(dir.0), residue_i128(dir.1)));
         for st in (0..stages).rev() {
-            let hop = (eye_before(q, hops, st), hops.get(st));
-            r = r.and_then(|r| self.map_hop_residue((hop.0, hop.1?), r));
+            let prev = eye_before(q, hops, st);
+            r = r.and_then(|r| self.map_hop_residue((prev, hops.get(st)?), r));
             if let Some(slot) = residues.get_mut(st) {
                 *slot = r;
             }
@@ -2119,8 +2119,8 @@ impl<S: Storage> Tree<'_, '_, S> {
         let (x, y) = rule.dir();
         let mut d = Some((Wide::from_i128(x), Wide::from_i128(y)));
         for st in (0..hops.len()).rev() {
-            let hop = (eye_before(q, hops, st), hops.get(st));
-            d = d.and_then(|d| self.map_hop_exact((hop.0, hop.1?), &d));
+            let prev = eye_before(q, hops, st);
+            d = d.and_then(|d| self.map_hop_exact((prev, hops.get(st)?), &d));
             if let Some(slot) = mapped.get_mut(st) {
                 *slot = d;
             }
@@ -3404,7 +3404,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         m: ObjectId,
         kind: SplitKind,
         p: &mut Piece,
-        edge: (usize, usize),
+        edge: Edge,
         left: bool,
     ) -> Result<bool, WalkError> {
         let here = self.hop(sc, level, kind, p, edge, left)?;
@@ -3443,7 +3443,7 @@ impl<S: Storage> Tree<'_, '_, S> {
         level: Level,
         kind: SplitKind,
         p: &mut Piece,
-        (ia, ib): (usize, usize),
+        (ia, ib): Edge,
         left: bool,
     ) -> Result<Level, WalkError> {
         let eye = sc.eye();
@@ -3629,7 +3629,7 @@ impl Split {
         ends: Ends<'_>,
         (eye, stage, level): (QueryPoint, u8, u8),
         out: &mut Piece,
-    ) -> Result<Option<(usize, usize)>, WalkError> {
+    ) -> Result<Option<Edge>, WalkError> {
         let ccw = self.level.ccw;
         // Never: a split on the stack has cut its first piece.
         if self.cut.last.is_none() && !self.cut.done {
@@ -3647,9 +3647,9 @@ impl Split {
 impl Cut {
     /// The next edge piece of the range `(from, to)` seen from `eye` in the direction
     /// `ccw`. The nonempty pieces are disjoint, so each is the one whose start comes first
-    /// after the last one's. `from` is needed for the first piece only (`None` after it:
-    /// `None` then, never, for a first piece): every later one starts where the last one
-    /// ended, strictly inside the range, so every test against `from` holds for it.
+    /// after the last one's. `from` is needed for the first piece only, and later ones are
+    /// cut without it (a first piece without it is `None`, never): each starts where the
+    /// last one ended, strictly inside the range, so every test against `from` holds for it.
     fn next<S: Storage>(
         &mut self,
         tree: &Tree<'_, '_, S>,
