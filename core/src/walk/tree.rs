@@ -485,7 +485,7 @@ impl<F: Frames> Stacks<F> {
     /// owns them and popped with it, so the last one led to that frame's eye.
     #[inline(always)]
     fn eye(&self) -> QueryPoint {
-        self.hops.last().map_or(self.eye, |h| h.next)
+        eye_before(self.eye, &self.hops, self.hops.len())
     }
 
     /// The lengths of the hop and branch stacks: where a boundary arises (its stage and
